@@ -1,0 +1,19 @@
+#pragma once
+// Each subcommand of the `btr` program registers itself on the CLI11 app; main() runs the chosen one.
+#include <CLI/CLI.hpp>
+#include <functional>
+
+namespace btr_app {
+
+// Exit codes shared by every subcommand.
+enum ExitCode { kSuccess = 0, kBadInput = 2, kInternalFailure = 3, kCheckFailed = 4, kEngineFailed = 5 };
+
+// A registered subcommand: `run` is called when the user chose it, and returns the exit code.
+using Runner = std::function<int()>;
+
+Runner add_deposit_command(CLI::App& app);
+Runner add_bench_command(CLI::App& app);
+Runner add_relax_command(CLI::App& app);
+Runner add_export_command(CLI::App& app);
+
+}  // namespace btr_app

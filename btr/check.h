@@ -1,0 +1,25 @@
+#pragma once
+// Self-check of a packing, written independently of the placement code: overlaps, grains not
+// supported (gravity not balanced by non-negative contact forces), grains outside the container.
+#include <cstdint>
+#include <vector>
+
+#include "btr/container.h"
+#include "btr/grain.h"
+
+namespace btr {
+
+struct CheckReport {
+  std::int64_t overlaps = 0;        // pairs (and grain-wall) overlapping by more than the tolerance
+  double max_overlap = 0.0;         // largest overlap / smaller radius
+  std::int64_t unsupported = 0;     // grains whose weight the contacts cannot carry
+  std::int64_t outside = 0;         // grains not inside the container
+  std::vector<std::int64_t> examples;  // ids of a few offending grains, for the message
+  bool ok() const { return overlaps == 0 && unsupported == 0 && outside == 0; }
+};
+
+// overlap_tol and contact_tol are relative to the smaller radius of the pair.
+CheckReport check_packing(const Grains& grains, int dimension, const Container& container,
+                          double overlap_tol = 1e-9, double contact_tol = 1e-7);
+
+}  // namespace btr

@@ -1,0 +1,26 @@
+#pragma once
+// The container a packing is built in. Gravity is along -z; the floor is z = 0 in every kind.
+// Lateral geometry is centred on the z axis:
+//   open       floor only, unbounded laterally
+//   box        side walls at x = +-size_x/2 (and y = +-size_y/2 in 3D)
+//   periodic   periodic in x (and y in 3D) with period size_x (size_y), domain [-L/2, L/2)
+//   hele-shaw  (3D only) plates at y = +-gap/2, end walls at x = +-size_x/2
+//   cylinder   (3D only) vertical cylinder of radius `radius` about the z axis
+#include <string>
+
+namespace btr {
+
+enum class ContainerKind { Open, Box, Periodic, HeleShaw, Cylinder };
+
+struct Container {
+  ContainerKind kind = ContainerKind::Open;
+  double size_x = 0.0;  // box, periodic, hele-shaw [m]
+  double size_y = 0.0;  // box, periodic (3D only) [m]
+  double gap = 0.0;     // hele-shaw plate distance w [m]
+  double radius = 0.0;  // cylinder inner radius [m]
+  double height = 0.0;  // optional wall height for the DEM stage; 0 = derived from the packing
+};
+
+const char* to_string(ContainerKind kind);
+
+}  // namespace btr

@@ -1,0 +1,490 @@
+// The placement of one grain is a sequence of events (DESIGN.md section 3). Its state is the centre
+// x and the active contacts; each step asks where gravity pushes it (descend), and moves it along
+// the path those contacts allow (a vertical fall, a circular arc, or the curve along a cylinder
+// wall) up to the first event: a new contact, a support lifting off, or the lowest point.
+#include "btr/deposition.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "btr/circle_arc.h"
+#include "btr/descent.h"
+#include "btr/neighbour_grid.h"
+#include "btr/obstacle.h"
+#include "btr/walls.h"
+
+namespace btr {
+namespace {
+
+constexpr int kMaxContacts = 8;
+// Arc parameter skipped after a tangency with a contact the grain is leaving (radians).
+constexpr double kSkipTangency = 1e-9;
+
+// splitmix64: a deterministic hash for tie-breaks (which way a grain balanced on a top rolls).
+std::uint64_t mix(std::uint64_t z) {
+  z += 0x9e3779b97f4a7c15ULL;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+struct Contacts {
+  Obstacle item[kMaxContacts];
+  int n = 0;
+  bool has(std::int64_t key) const {
+    for (int i = 0; i < n; ++i)
+      if (item[i].key == key) return true;
+    return false;
+  }
+  void add(const Obstacle& o) {
+    if (!has(o.key) && n < kMaxContacts) item[n++] = o;
+  }
+  void remove(int i) {
+    for (int k = i; k + 1 < n; ++k) item[k] = item[k + 1];
+    --n;
+  }
+};
+
+// The first event found along a path: its parameter and the obstacles met there.
+struct Event {
+  double t;
+  Contacts hits;
+  int lift_off = -1;  // index in the active contacts of a support that unloads
+  void offer(double t_new, const Obstacle& o, double tol) {
+    if (t_new < t - tol) {
+      t = t_new;
+      hits.n = 0;
+      lift_off = -1;
+    }
+    if (t_new <= t + tol) hits.add(o);
+  }
+};
+
+}  // namespace
+
+struct Deposition::Impl {
+  int dimension;
+  Container container;
+  double r_max;
+  int max_events;
+  Grains grains;
+  NeighbourGrid grid;
+  double top = 0.0;  // highest grain top so far
+
+  Impl(int dim, const Container& c, double rmax, int events)
+      : dimension(dim), container(c), r_max(rmax), max_events(events), grid(dim, c, rmax) {}
+
+  Obstacle sphere(std::int32_t i, const Vec3& shift, int image, double r) const {
+    Obstacle o;
+    o.kind = Obstacle::Kind::Sphere;
+    o.key = static_cast<std::int64_t>(i) * 81 + image;
+    o.c = grains[i].x + shift;
+    o.R = r + grains[i].r;
+    return o;
+  }
+
+  const Grain& place(const Drop& drop);
+  void fall(Vec3& x, double r, Contacts& active, const std::vector<Obstacle>& walls);
+  void roll_on_arc(Vec3& x, double r, Contacts& active, const CircleArc& arc, const std::vector<Obstacle>& walls);
+  bool roll_along_cylinder(Vec3& x, double r, Contacts& active, int sphere, int cylinder, const Vec3& d,
+                           const std::vector<Obstacle>& walls);
+  bool at_bottom(const Vec3& x, const Contacts& active) const;
+  Vec3 tie_break(const Vec3& x, const Contacts& active, std::uint64_t salt) const;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Fall: straight down to the highest contact below (DESIGN.md: z_j + sqrt((r + r_j)^2 - h^2)).
+void Deposition::Impl::fall(Vec3& x, double r, Contacts& active, const std::vector<Obstacle>& walls) {
+  const double tol = 1e-12 * r;
+  Event ev{x.z() - r, {}, -1};  // floor at z = r: t measures the drop
+  ev.hits.add(walls[0]);
+  const double reach = r + r_max;
+  grid.visit_column_down(
+      x.x(), x.y(), reach, x.z() + reach,
+      [&](double layer_top) { return layer_top + reach > x.z() - ev.t; },
+      [&](std::int32_t i, const Vec3& shift, int image) {
+        Obstacle o = sphere(i, shift, image, r);
+        const double dx = x.x() - o.c.x(), dy = x.y() - o.c.y();
+        const double s = o.R * o.R - dx * dx - dy * dy;
+        if (s <= 1e-12 * o.R * o.R) return;  // passes beside it (or grazes its equator)
+        const double z_hit = o.c.z() + std::sqrt(s);
+        if (z_hit > x.z() + tol || active.has(o.key)) return;
+        ev.offer(x.z() - z_hit, o, tol);
+      });
+  x.z() -= ev.t;
+  for (int k = 0; k < ev.hits.n; ++k) active.add(ev.hits.item[k]);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Roll along a circular arc (one support: a meridian; two: where their surfaces meet).
+void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const CircleArc& arc,
+                                   const std::vector<Obstacle>& walls) {
+  const double t_tol = 1e-13;
+  Event ev{arc.t_end, {}, -1};
+
+  auto offer_sphere = [&](const Obstacle& o) {
+    if (active.has(o.key)) return;
+    const Vec3 w = arc.C - o.c;
+    const double K = w.squaredNorm() + arc.rho * arc.rho;
+    const double a = 2.0 * arc.rho * w.dot(arc.u), b = 2.0 * arc.rho * w.dot(arc.v);
+    const double R2 = o.R * o.R;
+    if (K - std::sqrt(a * a + b * b) > R2 * (1.0 + 1e-9)) return;  // the whole circle passes outside
+    // Distance squared D(t) = K + a cos t + b sin t; the grain enters where D falls through R^2.
+    // Touching at the start: an event now if approaching; otherwise skip the tangency itself
+    // (round-off puts a root there) and look for the next crossing.
+    const bool touching = std::abs(K + a - R2) <= 1e-9 * R2;
+    if (touching && b < -1e-12 * R2) { ev.offer(0.0, o, t_tol); return; }
+    double t = first_rising_root(-a, -b, K - R2, touching ? kSkipTangency : 0.0, ev.t + t_tol);
+    if (t >= 0.0) ev.offer(t, o, t_tol);
+  };
+  auto offer_plane = [&](const Obstacle& o) {
+    if (active.has(o.key)) return;
+    const double g0 = o.c.dot(arc.C) - o.R;
+    const double a = arc.rho * o.c.dot(arc.u), b = arc.rho * o.c.dot(arc.v);
+    const bool touching = std::abs(g0 + a) <= 1e-9 * r;
+    if (touching && b < -1e-12 * r) { ev.offer(0.0, o, t_tol); return; }
+    double t = first_rising_root(-a, -b, g0, touching ? kSkipTangency : 0.0, ev.t + t_tol);
+    if (t >= 0.0) ev.offer(t, o, t_tol);
+  };
+  auto offer_cylinder = [&](const Obstacle& o) {
+    if (active.has(o.key)) return;
+    // |P_h(t)| is not a trigonometric polynomial of degree one: sample, then bisect.
+    const int samples = 64;
+    double t0 = 0.0;
+    for (int k = 1; k <= samples; ++k) {
+      double t1 = ev.t * k / samples, g1 = o.gap(arc.at(t1));
+      if (g1 < 0.0) {
+        for (int it = 0; it < 100 && t1 - t0 > t_tol; ++it) {
+          double tm = 0.5 * (t0 + t1);
+          (o.gap(arc.at(tm)) < 0.0 ? t1 : t0) = tm;
+        }
+        ev.offer(t0, o, t_tol);
+        return;
+      }
+      t0 = t1;
+    }
+  };
+
+  for (const Obstacle& w : walls) {
+    if (w.kind == Obstacle::Kind::Cylinder) offer_cylinder(w);
+    else offer_plane(w);
+  }
+  Vec3 lo, hi;
+  arc.bounds(lo, hi);
+  const Vec3 reach = Vec3::Constant(r + r_max);
+  grid.visit_box(lo - reach, hi + reach, [&](std::int32_t i, const Vec3& shift, int image) {
+    const Vec3 c = grains[i].x + shift;
+    const double R = r + grains[i].r;
+    if ((c - c.cwiseMax(lo).cwiseMin(hi)).squaredNorm() > R * R) return;  // too far from the arc's box
+    offer_sphere(sphere(i, shift, image, r));
+  });
+
+  // A support lifts off where its load changes sign: gravity's part normal to the path is then
+  // parallel to the other support's normal, det(z, T(t), N_other(t)) = 0.
+  if (active.n == 2) {
+    const Vec3 z = Vec3::UnitZ();
+    for (int k = 0; k < 2; ++k) {
+      const Obstacle& other = active.item[1 - k];
+      double a, b, c;
+      if (other.kind == Obstacle::Kind::Sphere) {
+        const Vec3 w = arc.C - other.c;
+        a = z.dot(arc.v.cross(w));
+        b = -z.dot(arc.u.cross(w));
+        c = arc.rho * z.dot(arc.u.cross(arc.v));
+      } else {
+        a = z.dot(arc.v.cross(other.c));
+        b = -z.dot(arc.u.cross(other.c));
+        c = 0.0;
+      }
+      double roots[2];
+      const int n = trig_roots(a, b, c, t_tol, ev.t, roots);
+      for (int m = 0; m < n; ++m) {
+        // Load of support k just after the root.
+        const double t = std::min(roots[m] + 1e-7, 0.5 * (roots[m] + arc.t_end));
+        const Vec3 P = arc.at(t), T = arc.tangent(t);
+        const Vec3 g_perp = z - z.dot(T) * T;
+        const Vec3 nk = active.item[k].normal(P), no = other.normal(P);
+        Eigen::Matrix2d A;
+        A << nk.dot(nk), nk.dot(no), no.dot(nk), no.dot(no);
+        Eigen::Vector2d rhs(nk.dot(g_perp), no.dot(g_perp));
+        const Eigen::Vector2d f = A.inverse() * rhs;
+        if (f(0) < 0.0 && roots[m] < ev.t - t_tol) {
+          ev.t = roots[m];
+          ev.hits.n = 0;
+          ev.lift_off = k;
+          break;
+        }
+      }
+    }
+  }
+
+  x = arc.at(ev.t);
+  if (ev.lift_off >= 0) active.remove(ev.lift_off);
+  for (int k = 0; k < ev.hits.n; ++k) active.add(ev.hits.item[k]);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Roll on one grain while pressed against the cylinder wall. The path (centre on the cylinder
+// |x_h| = R, at distance R_p from the support) is not a circle: it is followed in small steps of
+// the azimuth, and each event is located by bisection.
+// Returns true when the grain comes to rest at the lowest point of that curve.
+bool Deposition::Impl::roll_along_cylinder(Vec3& x, double r, Contacts& active, int si, int ci, const Vec3& d,
+                                           const std::vector<Obstacle>& walls) {
+  const Obstacle p = active.item[si];
+  const Obstacle cyl = active.item[ci];
+  const double Rc = cyl.R;
+  double phi = std::atan2(x.y(), x.x());
+  const double sign = d.dot(Vec3(-std::sin(phi), std::cos(phi), 0.0)) >= 0.0 ? 1.0 : -1.0;
+  const double zside = x.z() >= p.c.z() ? 1.0 : -1.0;
+  auto at = [&](double f) -> std::pair<Vec3, bool> {
+    Vec3 P(Rc * std::cos(f), Rc * std::sin(f), 0.0);
+    const double h2 = (P.head<2>() - p.c.head<2>()).squaredNorm();
+    const double s = p.R * p.R - h2;
+    if (s < 0.0) return {P, false};
+    P.z() = p.c.z() + zside * std::sqrt(s);
+    return {P, true};
+  };
+  const Vec3 z = Vec3::UnitZ();
+  const double gap_tol = 1e-12 * r;
+  // 0: continue; 1: new contact; 2: lift off p; 3: lift off the wall; 4: lowest point passed.
+  std::vector<Obstacle> candidates;
+  auto condition = [&](double f) -> int {
+    auto [P, ok] = at(f);
+    if (!ok) return 2;
+    for (const Obstacle& o : candidates)
+      if (!active.has(o.key) && o.gap(P) < -gap_tol) return 1;
+    if (walls[0].gap(P) < -gap_tol) return 1;
+    // Height change along the motion: dz/dphi = zside * (ds/dphi) / (2 sqrt(s)).
+    const Vec3 dPh(-Rc * std::sin(f), Rc * std::cos(f), 0.0);
+    const double s = p.R * p.R - (P.head<2>() - p.c.head<2>()).squaredNorm();
+    const double dz = zside * (-(P.head<2>() - p.c.head<2>()).dot(dPh.head<2>())) / std::sqrt(std::max(s, 1e-300));
+    if (sign * dz > 0.0) return 4;
+    const Vec3 T = Vec3(sign * dPh.x(), sign * dPh.y(), sign * dz).normalized();
+    const Vec3 g_perp = z - z.dot(T) * T;
+    const Vec3 np = p.normal(P), nc = cyl.normal(P);
+    Eigen::Matrix2d A;
+    A << np.dot(np), np.dot(nc), nc.dot(np), nc.dot(nc);
+    const Eigen::Vector2d f2 = A.inverse() * Eigen::Vector2d(np.dot(g_perp), nc.dot(g_perp));
+    if (f2(0) < 0.0) return 2;
+    if (f2(1) < 0.0) return 3;
+    return 0;
+  };
+  const double step = sign * 0.05 * r / Rc;
+  const double reach = 2.0 * r + 2.0 * r_max;
+  for (int chunk = 0; chunk < 1000; ++chunk) {
+    candidates.clear();
+    const Vec3 here = at(phi).first;
+    grid.visit_box(here - Vec3::Constant(reach + 20 * std::abs(step) * Rc),
+                   here + Vec3::Constant(reach + 20 * std::abs(step) * Rc),
+                   [&](std::int32_t i, const Vec3& shift, int image) { candidates.push_back(sphere(i, shift, image, r)); });
+    for (int k = 0; k < 20; ++k) {
+      if (condition(phi + step) == 0) {
+        phi += step;
+        continue;
+      }
+      double f0 = phi, f1 = phi + step;
+      for (int it = 0; it < 200 && std::abs(f1 - f0) > 1e-15; ++it) {
+        const double fm = 0.5 * (f0 + f1);
+        (condition(fm) == 0 ? f0 : f1) = fm;
+      }
+      x = at(f0).first;
+      switch (condition(f1)) {
+        case 1: {
+          const Vec3 P1 = at(f1).first;
+          for (const Obstacle& o : candidates)
+            if (o.gap(P1) < -gap_tol) active.add(o);
+          if (walls[0].gap(P1) < -gap_tol) active.add(walls[0]);
+          return false;
+        }
+        case 2: active.remove(si); return false;
+        case 3: active.remove(ci); return false;
+        case 4: return true;  // the lowest point of the curve
+        default: phi = f1; continue;
+      }
+    }
+  }
+  x = at(phi).first;
+  return false;
+}
+
+// ---------------------------------------------------------------------------------------------
+// With the weight carried by two supports, is the grain at the bottom of their common curve?
+bool Deposition::Impl::at_bottom(const Vec3& x, const Contacts& active) const {
+  const Obstacle& a = active.item[0];
+  const Obstacle& b = active.item[1];
+  const Obstacle& s = a.kind == Obstacle::Kind::Sphere ? a : b;
+  const Obstacle& o = a.kind == Obstacle::Kind::Sphere ? b : a;
+  if (o.kind == Obstacle::Kind::Cylinder) {
+    // Compare the height a little either way along the wall.
+    const double phi = std::atan2(x.y(), x.x()), dphi = 1e-4;
+    auto height = [&](double f) {
+      Vec3 P(o.R * std::cos(f), o.R * std::sin(f), 0.0);
+      const double h2 = (P.head<2>() - s.c.head<2>()).squaredNorm();
+      return s.c.z() + std::sqrt(std::max(0.0, s.R * s.R - h2));
+    };
+    return height(phi + dphi) >= x.z() && height(phi - dphi) >= x.z();
+  }
+  Vec3 C;
+  if (o.kind == Obstacle::Kind::Sphere) {
+    const Vec3 axis = (o.c - s.c).normalized();
+    const double D = (o.c - s.c).norm();
+    C = s.c + axis * ((s.R * s.R - o.R * o.R + D * D) / (2.0 * D));
+  } else {
+    C = s.c + (o.R - o.c.dot(s.c)) * o.c;
+  }
+  return x.z() <= C.z() + 1e-12 * s.R;
+}
+
+Vec3 Deposition::Impl::tie_break(const Vec3& x, const Contacts& active, std::uint64_t salt) const {
+  const std::uint64_t h = mix(salt);
+  if (active.n == 1) {
+    if (dimension == 2) return Vec3((h & 1) ? 1.0 : -1.0, 0.0, 0.0);
+    const double angle = static_cast<double>(h >> 11) * 0x1.0p-53 * kTwoPi;
+    return Vec3(std::cos(angle), std::sin(angle), 0.0);
+  }
+  const Vec3 n0 = active.item[0].normal(x), n1 = active.item[1].normal(x);
+  Vec3 t = n0.cross(n1);
+  if (t.norm() < 1e-12) return Vec3::Zero();
+  t.normalize();
+  return (h & 1) ? t : Vec3(-t);
+}
+
+// ---------------------------------------------------------------------------------------------
+const Grain& Deposition::Impl::place(const Drop& drop) {
+  const std::int64_t id = static_cast<std::int64_t>(grains.size()) + 1;
+  const double r = drop.r;
+  if (!(r > 0.0) || r > r_max * (1.0 + 1e-12)) {
+    std::ostringstream why;
+    why << "radius " << r << " is not in (0, r_max = " << r_max << "]";
+    throw PlacementError(id, why.str());
+  }
+  double px = drop.x, py = dimension == 3 ? drop.y : 0.0;
+  if (container.kind == ContainerKind::Periodic) {
+    px -= container.size_x * std::floor(px / container.size_x + 0.5);
+    if (dimension == 3) py -= container.size_y * std::floor(py / container.size_y + 0.5);
+  }
+  const std::string misfit = drop_misfit(container, dimension, px, py, r);
+  if (!misfit.empty()) throw PlacementError(id, "dropped outside the container: " + misfit);
+
+  const std::vector<Obstacle> walls = container_walls(container, dimension, r);
+  Vec3 x(px, py, top + r + 2.0 * r_max);
+  Contacts active;
+  bool stable = false;
+  for (int event = 0; event < max_events && !stable; ++event) {
+    Vec3 normals[kMaxContacts];
+    for (int i = 0; i < active.n; ++i) normals[i] = active.item[i].normal(x);
+    const Descent descent = descend(normals, static_cast<std::size_t>(active.n));
+    Contacts loaded;
+    for (int i = 0; i < active.n; ++i)
+      if (descent.loaded[i]) loaded.add(active.item[i]);
+    active = loaded;
+    Vec3 d = descent.direction;
+    // Gravity balanced by as many independent supports as the dimension: d is round-off.
+    if (active.n >= dimension) d = Vec3::Zero();
+
+    if (d.isZero()) {
+      bool on_floor = false;
+      for (int i = 0; i < active.n; ++i) on_floor |= active.item[i].is_floor();
+      if (on_floor || active.n >= dimension || (active.n == 2 && at_bottom(x, active))) {
+        stable = true;
+        break;
+      }
+      // Balanced on a top (above one centre, or the top of a two-support curve): roll off it in
+      // a direction fixed by the grain's id, so the result is deterministic.
+      d = tie_break(x, active, static_cast<std::uint64_t>(id) * 1315423911ULL + event);
+      if (d.isZero()) { stable = true; break; }
+    }
+
+    int spheres = 0, planes = 0, cylinders = 0, si = -1, pi = -1, ci = -1;
+    for (int i = 0; i < active.n; ++i) {
+      switch (active.item[i].kind) {
+        case Obstacle::Kind::Sphere: ++spheres; si = si < 0 ? i : si; break;
+        case Obstacle::Kind::Plane: ++planes; pi = i; break;
+        case Obstacle::Kind::Cylinder: ++cylinders; ci = i; break;
+      }
+    }
+    if (spheres == 0) {
+      fall(x, r, active, walls);
+      continue;
+    }
+    const Obstacle& p = active.item[si];
+    CircleArc arc;
+    if (spheres == 1 && planes == 0 && cylinders == 0) {
+      arc.C = p.c;
+      arc.rho = p.R;
+      arc.u = (x - p.c).normalized();
+      arc.v = (d - d.dot(arc.u) * arc.u).normalized();
+      arc.t_end = std::max(0.0, std::atan2(arc.u.z(), -arc.v.z()));  // the support's equator
+    } else if ((spheres == 2 && planes == 0 && cylinders == 0) || (spheres == 1 && planes == 1 && cylinders == 0)) {
+      Vec3 axis;
+      if (spheres == 2) {
+        int qi = si + 1;
+        while (active.item[qi].kind != Obstacle::Kind::Sphere) ++qi;
+        const Obstacle& q = active.item[qi];
+        const double D = (q.c - p.c).norm();
+        axis = (q.c - p.c) / D;
+        const double s = (p.R * p.R - q.R * q.R + D * D) / (2.0 * D);
+        arc.C = p.c + s * axis;
+        arc.rho = std::sqrt(std::max(0.0, p.R * p.R - s * s));
+      } else {
+        const Obstacle& w = active.item[pi];
+        axis = w.c;
+        const double s = w.R - w.c.dot(p.c);
+        arc.C = p.c + s * axis;
+        arc.rho = std::sqrt(std::max(0.0, p.R * p.R - s * s));
+      }
+      Vec3 radial = x - arc.C;
+      radial -= radial.dot(axis) * axis;
+      if (arc.rho <= 1e-12 * r || radial.norm() <= 1e-12 * r) {
+        // The supports meet in a point: nowhere to roll, the grain rests there.
+        stable = true;
+        break;
+      }
+      arc.u = radial.normalized();
+      arc.v = axis.cross(arc.u);
+      if (arc.v.dot(d) < 0.0) arc.v = -arc.v;
+      double t_low = std::atan2(-arc.v.z(), -arc.u.z());
+      if (t_low <= 0.0) t_low += kTwoPi;
+      arc.t_end = t_low;  // the lowest point of the circle
+    } else if (spheres == 1 && cylinders == 1 && planes == 0) {
+      if (roll_along_cylinder(x, r, active, si, ci, d, walls)) stable = true;
+      continue;
+    } else {
+      std::ostringstream why;
+      why << "no rule for rolling on " << spheres << " grains, " << planes << " walls and " << cylinders
+          << " cylinders at (" << x.x() << ", " << x.y() << ", " << x.z() << ")";
+      throw PlacementError(id, why.str());
+    }
+    roll_on_arc(x, r, active, arc, walls);
+  }
+  if (!stable) {
+    std::ostringstream why;
+    why << "no stable position after " << max_events << " events; last at (" << x.x() << ", " << x.y() << ", "
+        << x.z() << ") with " << active.n << " contacts";
+    throw PlacementError(id, why.str());
+  }
+  if (container.kind == ContainerKind::Periodic) {
+    x.x() -= container.size_x * std::floor(x.x() / container.size_x + 0.5);
+    if (dimension == 3) x.y() -= container.size_y * std::floor(x.y() / container.size_y + 0.5);
+  }
+  grains.push_back(Grain{x, r, drop.species});
+  grid.insert(static_cast<std::int32_t>(grains.size() - 1), x);
+  top = std::max(top, x.z() + r);
+  return grains.back();
+}
+
+// ---------------------------------------------------------------------------------------------
+Deposition::Deposition(int dimension, const Container& container, double r_max, int max_events_per_grain) {
+  if (dimension != 2 && dimension != 3) throw std::invalid_argument("dimension must be 2 or 3");
+  if (!(r_max > 0.0)) throw std::invalid_argument("r_max must be positive");
+  impl_ = std::make_unique<Impl>(dimension, container, r_max, max_events_per_grain);
+}
+Deposition::~Deposition() = default;
+const Grain& Deposition::place(const Drop& drop) { return impl_->place(drop); }
+const Grains& Deposition::grains() const { return impl_->grains; }
+int Deposition::dimension() const { return impl_->dimension; }
+const Container& Deposition::container() const { return impl_->container; }
+
+}  // namespace btr

@@ -1,0 +1,52 @@
+#pragma once
+// The BTR placement engine: grains are dropped one at a time and each falls, rolls over the grains
+// already fixed and stops where gravity is balanced by its supports (DESIGN.md section 3).
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "container.h"
+#include "grain.h"
+
+namespace btr {
+
+// One grain to place: where it is dropped (x, y; y is ignored in 2D) and its size.
+struct Drop {
+  double x = 0.0, y = 0.0;
+  double r = 0.0;
+  int species = 1;
+};
+
+// A grain that could not be placed (event budget exhausted, a drop outside the container, ...).
+class PlacementError : public std::runtime_error {
+ public:
+  PlacementError(std::int64_t grain_id, const std::string& what)
+      : std::runtime_error("grain " + std::to_string(grain_id) + ": " + what), grain_id_(grain_id) {}
+  std::int64_t grain_id() const { return grain_id_; }
+
+ private:
+  std::int64_t grain_id_;
+};
+
+class Deposition {
+ public:
+  // r_max bounds every radius that will be placed (it sizes the neighbour grid).
+  Deposition(int dimension, const Container& container, double r_max, int max_events_per_grain = 10000);
+  ~Deposition();
+  Deposition(const Deposition&) = delete;
+  Deposition& operator=(const Deposition&) = delete;
+
+  // Places one grain and returns it as fixed (its id is grains().size()). Throws PlacementError.
+  const Grain& place(const Drop& drop);
+
+  const Grains& grains() const;
+  int dimension() const;
+  const Container& container() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace btr

@@ -1,0 +1,111 @@
+#include "btr/drop_list.h"
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+
+#include "btr/scene_toml.h"
+
+namespace btr {
+namespace {
+
+std::string trim(const std::string& s) {
+  const char* ws = " \t\r";
+  auto b = s.find_first_not_of(ws);
+  if (b == std::string::npos) return "";
+  return s.substr(b, s.find_last_not_of(ws) - b + 1);
+}
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  for (;;) {
+    auto comma = line.find(',', start);
+    out.push_back(trim(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
+    if (comma == std::string::npos) return out;
+    start = comma + 1;
+  }
+}
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
+  return s;
+}
+
+bool parse_double(const std::string& s, double& out) {
+  if (s.empty()) return false;
+  const char* b = s.data();
+  if (*b == '+') ++b;  // from_chars does not take a leading '+'
+  auto [p, ec] = std::from_chars(b, s.data() + s.size(), out);
+  return ec == std::errc() && p == s.data() + s.size() && std::isfinite(out);
+}
+
+bool parse_int(const std::string& s, int& out) {
+  if (s.empty()) return false;
+  auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
+  return ec == std::errc() && p == s.data() + s.size();
+}
+
+}  // namespace
+
+std::vector<ListedDrop> read_drop_list(const std::string& path, int dimension) {
+  std::ifstream in(path);
+  if (!in) throw SceneError(path + ": cannot open the drop list file");
+  const std::vector<std::string> base = dimension == 2 ? std::vector<std::string>{"x", "r"}
+                                                       : std::vector<std::string>{"x", "y", "r"};
+  auto with_species = base;
+  with_species.push_back("species");
+
+  std::vector<ListedDrop> drops;
+  std::vector<std::string> columns;  // fixed by the header or by the first data row
+  std::string raw;
+  int line_no = 0;
+  while (std::getline(in, raw)) {
+    ++line_no;
+    const std::string line = trim(raw);
+    if (line.empty() || line[0] == '#') continue;
+    auto fields = split(line);
+    const std::string where = path + ":" + std::to_string(line_no) + ": ";
+    const bool is_header = std::isalpha(static_cast<unsigned char>(line[0]));
+    if (is_header) {
+      if (!columns.empty() || !drops.empty())
+        throw SceneError(where + "expected a row of numbers, got '" + line + "'");
+      if (fields != base && fields != with_species)
+        throw SceneError(where + "header: expected '" + join(base) + "' or '" + join(with_species) +
+                         "' for dimension " + std::to_string(dimension) + ", got '" + line + "'");
+      columns = fields;
+      continue;
+    }
+    if (columns.empty()) {
+      if (fields.size() == base.size()) columns = base;
+      else if (fields.size() == with_species.size()) columns = with_species;
+    }
+    if (fields.size() != columns.size() || columns.empty())
+      throw SceneError(where + "expected " + std::to_string(columns.empty() ? base.size() : columns.size()) +
+                       " columns (" + join(columns.empty() ? base : columns) + ") for dimension " +
+                       std::to_string(dimension) + ", got " + std::to_string(fields.size()));
+    ListedDrop d;
+    d.line = line_no;
+    std::string r_text;
+    for (std::size_t i = 0; i < columns.size(); ++i) {
+      if (columns[i] == "species") {
+        if (!parse_int(fields[i], d.species) || d.species < 1)
+          throw SceneError(where + "species: expected an integer >= 1, got '" + fields[i] + "'");
+        continue;
+      }
+      double v = 0.0;
+      if (!parse_double(fields[i], v))
+        throw SceneError(where + columns[i] + ": expected a number, got '" + fields[i] + "'");
+      if (columns[i] == "x") d.x = v;
+      else if (columns[i] == "y") d.y = v;
+      else d.r = v, r_text = fields[i];
+    }
+    if (!(d.r > 0.0)) throw SceneError(where + "r: expected a positive radius, got '" + r_text + "'");
+    drops.push_back(d);
+  }
+  if (drops.empty()) throw SceneError(path + ": the drop list has no rows");
+  return drops;
+}
+
+}  // namespace btr

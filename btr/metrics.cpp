@@ -1,0 +1,504 @@
+#include "btr/metrics.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+namespace btr {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+double max_radius(const Grains& grains) {
+  double r = 0.0;
+  for (const Grain& g : grains) r = std::max(r, g.r);
+  return r;
+}
+
+// ---------------------------------------------------------------- volumes
+
+// Area of the disk of radius rho about the origin inside [0, X] x [0, Y], for X, Y >= 0.
+double corner_area(double X, double Y, double rho) {
+  X = std::min(X, rho);
+  Y = std::min(Y, rho);
+  if (X * X + Y * Y <= rho * rho) return X * Y;
+  const double r2 = rho * rho;
+  auto S = [&](double x) {  // integral of sqrt(rho^2 - t^2) from 0 to x
+    return 0.5 * (x * std::sqrt(std::max(0.0, r2 - x * x)) + r2 * std::asin(std::clamp(x / rho, -1.0, 1.0)));
+  };
+  const double x0 = std::sqrt(std::max(0.0, r2 - Y * Y));
+  return Y * x0 + S(X) - S(x0);
+}
+
+double signed_corner_area(double X, double Y, double rho) {
+  double a = corner_area(std::abs(X), std::abs(Y), rho);
+  return ((X < 0) != (Y < 0)) ? -a : a;
+}
+
+// Area of the disk (centre (cx, cy), radius rho) inside [x0, x1] x [y0, y1], by inclusion-exclusion
+// of signed corner areas.
+double disk_rect_area(double cx, double cy, double rho, double x0, double x1, double y0, double y1) {
+  if (rho <= 0.0) return 0.0;
+  const double a = x0 - cx, b = x1 - cx, c = y0 - cy, d = y1 - cy;
+  double area = signed_corner_area(b, d, rho) - signed_corner_area(a, d, rho) - signed_corner_area(b, c, rho) +
+                signed_corner_area(a, c, rho);
+  return std::max(0.0, area);
+}
+
+// Volume of a sphere of radius r between the heights t = a and t = b relative to its centre.
+double sphere_slab(double r, double a, double b) {
+  a = std::clamp(a, -r, r);
+  b = std::clamp(b, -r, r);
+  if (b <= a) return 0.0;
+  auto F = [&](double t) { return r * r * t - t * t * t / 3.0; };
+  return kPi * (F(b) - F(a));
+}
+
+// Area of a disk of radius r between t = a and t = b relative to its centre.
+double disk_slab(double r, double a, double b) {
+  a = std::clamp(a, -r, r);
+  b = std::clamp(b, -r, r);
+  if (b <= a) return 0.0;
+  auto F = [&](double t) { return t * std::sqrt(std::max(0.0, r * r - t * t)) + r * r * std::asin(t / r); };
+  return F(b) - F(a);
+}
+
+struct GaussLegendre {
+  static constexpr int kN = 32;
+  std::array<double, kN> x{}, w{};
+  GaussLegendre() {
+    for (int i = 0; i < kN; ++i) {
+      double z = std::cos(kPi * (i + 0.75) / (kN + 0.5)), dp = 0.0;
+      for (int it = 0; it < 100; ++it) {
+        double p0 = 1.0, p1 = 0.0;
+        for (int k = 1; k <= kN; ++k) {
+          double p2 = p1;
+          p1 = p0;
+          p0 = ((2.0 * k - 1.0) * z * p1 - (k - 1.0) * p2) / k;
+        }
+        dp = kN * (z * p0 - p1) / (z * z - 1.0);
+        double dz = p0 / dp;
+        z -= dz;
+        if (std::abs(dz) < 1e-16) break;
+      }
+      x[i] = z;
+      w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
+    }
+  }
+};
+
+// Sphere cut by vertical box sides: integrate the exact disk-rectangle area over z = zc + r sin(theta)
+// (dz = r cos(theta) dtheta removes the square-root ends), split where the section radius crosses the
+// distance to a side line or a corner, where the integrand has a kink.
+double sphere_box_quadrature(const Grain& g, const Box& box, double z1, double z2) {
+  static const GaussLegendre gl;
+  const double r = g.r, cx = g.x.x(), cy = g.x.y(), zc = g.x.z();
+  const double t1 = std::asin(std::clamp((z1 - zc) / r, -1.0, 1.0));
+  const double t2 = std::asin(std::clamp((z2 - zc) / r, -1.0, 1.0));
+  std::vector<double> cuts{t1, t2};
+  const double dx[2] = {std::abs(box.lo.x() - cx), std::abs(box.hi.x() - cx)};
+  const double dy[2] = {std::abs(box.lo.y() - cy), std::abs(box.hi.y() - cy)};
+  std::vector<double> radii{dx[0], dx[1], dy[0], dy[1]};
+  for (double a : dx)
+    for (double b : dy) radii.push_back(std::hypot(a, b));
+  for (double rho : radii) {
+    if (rho <= 0.0 || rho >= r) continue;
+    double t = std::acos(rho / r);
+    for (double tt : {t, -t})
+      if (tt > t1 && tt < t2) cuts.push_back(tt);
+  }
+  std::sort(cuts.begin(), cuts.end());
+  double volume = 0.0;
+  for (std::size_t k = 0; k + 1 < cuts.size(); ++k) {
+    const double a = cuts[k], b = cuts[k + 1];
+    if (b <= a) continue;
+    // t = a + (b - a) s(u), s = 3u^2 - 2u^3: the (t - t_k)^(3/2) kinks at the ends become smooth in u.
+    double sum = 0.0;
+    for (int i = 0; i < GaussLegendre::kN; ++i) {
+      const double u = 0.5 * (1.0 + gl.x[i]);
+      const double t = a + (b - a) * u * u * (3.0 - 2.0 * u);
+      const double dt_du = (b - a) * 6.0 * u * (1.0 - u);
+      const double rho = r * std::cos(t);
+      sum += 0.5 * gl.w[i] * dt_du * disk_rect_area(cx, cy, rho, box.lo.x(), box.hi.x(), box.lo.y(), box.hi.y()) * rho;
+    }
+    volume += sum;  // dz = r cos(t) dt = rho dt
+  }
+  return volume;
+}
+
+bool in_window(const Vec3& x, int dimension, const Box& w) {
+  if (x.x() < w.lo.x() || x.x() > w.hi.x() || x.z() < w.lo.z() || x.z() > w.hi.z()) return false;
+  return dimension == 2 || (x.y() >= w.lo.y() && x.y() <= w.hi.y());
+}
+
+// ---------------------------------------------------------------- neighbour cells
+
+// Grains sorted into cubic cells (squares in x-z for 2D) at least one largest diameter wide.
+class Cells {
+ public:
+  Cells(const Grains& grains, int dimension, const Container& container, double width) {
+    const bool periodic = container.kind == ContainerKind::Periodic;
+    Vec3 lo = Vec3::Constant(std::numeric_limits<double>::max()), hi = -lo;
+    for (const Grain& g : grains) {
+      lo = lo.cwiseMin(g.x);
+      hi = hi.cwiseMax(g.x);
+    }
+    if (dimension == 2) lo.y() = hi.y() = 0.0;
+    // Keep the dense cell array at most a few times the number of grains.
+    for (;;) {
+      for (int a = 0; a < 3; ++a) {
+        periodic_[a] = periodic && a < 2 && !(a == 1 && dimension == 2);
+        if (periodic_[a]) {
+          period_[a] = a == 0 ? container.size_x : container.size_y;
+          origin_[a] = -0.5 * period_[a];
+          n_[a] = std::max(1, static_cast<int>(std::floor(period_[a] / width)));
+          size_[a] = period_[a] / n_[a];
+        } else {
+          origin_[a] = lo[a];
+          size_[a] = width;
+          n_[a] = static_cast<int>(std::floor((hi[a] - lo[a]) / width)) + 1;
+        }
+      }
+      if (dimension == 2) n_[1] = 1;
+      double cells = double(n_[0]) * n_[1] * n_[2];
+      if (cells <= 8.0 * grains.size() + 4096) break;
+      width *= 1.5;
+    }
+    const std::size_t ncells = std::size_t(n_[0]) * n_[1] * n_[2];
+    start_.assign(ncells + 1, 0);
+    std::vector<std::uint32_t> cell(grains.size());
+    for (std::size_t i = 0; i < grains.size(); ++i) {
+      cell[i] = static_cast<std::uint32_t>(index(coords(grains[i].x)));
+      ++start_[cell[i] + 1];
+    }
+    for (std::size_t c = 0; c < ncells; ++c) start_[c + 1] += start_[c];
+    order_.resize(grains.size());
+    std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
+    for (std::size_t i = 0; i < grains.size(); ++i) order_[fill[cell[i]]++] = static_cast<std::uint32_t>(i);
+  }
+
+  // Calls f(j) for every grain j in the cells around position x (each cell once).
+  template <class F>
+  void for_neighbours(const Vec3& x, F&& f) const {
+    std::array<int, 3> c = coords(x);
+    std::array<std::array<int, 3>, 3> idx;
+    std::array<int, 3> count{};
+    for (int a = 0; a < 3; ++a) {
+      for (int d = -1; d <= 1; ++d) {
+        int k = c[a] + d;
+        if (periodic_[a]) k = ((k % n_[a]) + n_[a]) % n_[a];
+        else if (k < 0 || k >= n_[a]) continue;
+        bool seen = false;
+        for (int q = 0; q < count[a]; ++q) seen = seen || idx[a][q] == k;
+        if (!seen) idx[a][count[a]++] = k;
+      }
+    }
+    for (int i = 0; i < count[0]; ++i)
+      for (int j = 0; j < count[1]; ++j)
+        for (int k = 0; k < count[2]; ++k) {
+          std::size_t cell = index({idx[0][i], idx[1][j], idx[2][k]});
+          for (std::uint32_t p = start_[cell]; p < start_[cell + 1]; ++p) f(order_[p]);
+        }
+  }
+
+  // Shortest separation vector from b to a (minimum image across periodic sides).
+  Vec3 separation(const Vec3& a, const Vec3& b) const {
+    Vec3 d = a - b;
+    for (int k = 0; k < 3; ++k)
+      if (periodic_[k]) d[k] -= period_[k] * std::round(d[k] / period_[k]);
+    return d;
+  }
+
+ private:
+  std::array<int, 3> coords(const Vec3& x) const {
+    std::array<int, 3> c{};
+    for (int a = 0; a < 3; ++a) {
+      int k = static_cast<int>(std::floor((x[a] - origin_[a]) / size_[a]));
+      if (periodic_[a]) k = ((k % n_[a]) + n_[a]) % n_[a];
+      c[a] = std::clamp(k, 0, n_[a] - 1);
+    }
+    return c;
+  }
+  std::size_t index(const std::array<int, 3>& c) const {
+    return (std::size_t(c[2]) * n_[1] + c[1]) * n_[0] + c[0];
+  }
+
+  bool periodic_[3] = {false, false, false};
+  double period_[3] = {0, 0, 0}, origin_[3] = {0, 0, 0}, size_[3] = {1, 1, 1};
+  int n_[3] = {1, 1, 1};
+  std::vector<std::uint32_t> start_, order_;
+};
+
+// ---------------------------------------------------------------- free surface
+
+// Lowest of the column tops (highest grain top per column, columns about two largest diameters wide)
+// over the lateral rectangle [x0, x1] x [y0, y1]; 0 if a column holds no grain.
+double lowest_surface(const Grains& grains, int dimension, double column, double x0, double x1, double y0,
+                      double y1) {
+  const int nx = std::max(1, static_cast<int>(std::ceil((x1 - x0) / column - 1e-9)));
+  const int ny = dimension == 2 ? 1 : std::max(1, static_cast<int>(std::ceil((y1 - y0) / column - 1e-9)));
+  const double wx = (x1 - x0) / nx, wy = dimension == 2 ? 1.0 : (y1 - y0) / ny;
+  std::vector<double> top(std::size_t(nx) * ny, 0.0);
+  for (const Grain& g : grains) {
+    if (g.x.x() < x0 || g.x.x() > x1) continue;
+    if (dimension == 3 && (g.x.y() < y0 || g.x.y() > y1)) continue;
+    int i = std::clamp(static_cast<int>((g.x.x() - x0) / wx), 0, nx - 1);
+    int j = dimension == 2 ? 0 : std::clamp(static_cast<int>((g.x.y() - y0) / wy), 0, ny - 1);
+    double& t = top[std::size_t(j) * nx + i];
+    t = std::max(t, g.x.z() + g.r);
+  }
+  return *std::min_element(top.begin(), top.end());
+}
+
+double fill_fraction(const Grains& grains, int dimension, const BulkMeasures& m) {
+  double solid = 0.0;
+  for (const Grain& g : grains)
+    solid += m.slab ? grain_volume_in_slab(g, dimension, m.window.lo.z(), m.window.hi.z())
+                    : grain_volume_in_box(g, dimension, m.window);
+  return solid / m.window_volume;
+}
+
+std::string fmt(const char* format, double a, double b = 0.0) {
+  char buf[200];
+  std::snprintf(buf, sizeof buf, format, a, b);
+  return buf;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- public
+
+std::vector<int> coordination_numbers(const Grains& grains, int dimension, const Container& container,
+                                      double contact_tol) {
+  std::vector<int> z(grains.size(), 0);
+  if (grains.empty()) return z;
+  const double r_max = max_radius(grains);
+  Cells cells(grains, dimension, container, 2.0 * r_max * (1.0 + 2.0 * contact_tol) * 1.0001);
+  for (std::size_t i = 0; i < grains.size(); ++i) {
+    const Grain& gi = grains[i];
+    cells.for_neighbours(gi.x, [&](std::uint32_t j) {
+      if (j <= i) return;
+      const Grain& gj = grains[j];
+      const double gap = cells.separation(gi.x, gj.x).norm() - gi.r - gj.r;
+      if (gap < contact_tol * std::min(gi.r, gj.r)) {
+        ++z[i];
+        ++z[j];
+      }
+    });
+  }
+  return z;
+}
+
+double grain_volume_in_slab(const Grain& g, int dimension, double z_lo, double z_hi) {
+  const double a = z_lo - g.x.z(), b = z_hi - g.x.z();
+  return dimension == 2 ? disk_slab(g.r, a, b) : sphere_slab(g.r, a, b);
+}
+
+double grain_volume_in_box(const Grain& g, int dimension, const Box& box) {
+  const double r = g.r;
+  const double z1 = std::max(box.lo.z(), g.x.z() - r), z2 = std::min(box.hi.z(), g.x.z() + r);
+  if (z2 <= z1) return 0.0;
+  if (dimension == 2)
+    return disk_rect_area(g.x.x(), g.x.z(), r, box.lo.x(), box.hi.x(), box.lo.z(), box.hi.z());
+  const double x = g.x.x(), y = g.x.y();
+  if (x + r <= box.lo.x() || x - r >= box.hi.x() || y + r <= box.lo.y() || y - r >= box.hi.y()) return 0.0;
+  if (x - r >= box.lo.x() && x + r <= box.hi.x() && y - r >= box.lo.y() && y + r <= box.hi.y())
+    return sphere_slab(r, z1 - g.x.z(), z2 - g.x.z());
+  return sphere_box_quadrature(g, box, z1, z2);
+}
+
+double packing_fraction_in_box(const Grains& grains, int dimension, const Box& box) {
+  double volume = (box.hi.x() - box.lo.x()) * (box.hi.z() - box.lo.z());
+  if (dimension == 3) volume *= box.hi.y() - box.lo.y();
+  double solid = 0.0;
+  for (const Grain& g : grains) solid += grain_volume_in_box(g, dimension, box);
+  return solid / volume;
+}
+
+BulkMeasures bulk_measures(const Grains& grains, int dimension, const Container& container,
+                           const MetricsOptions& options, const std::vector<int>* coordination) {
+  BulkMeasures m;
+  if (grains.empty()) {
+    m.note = "no grains";
+    return m;
+  }
+  const double d = 2.0 * max_radius(grains);
+  const double margin = options.margin_diameters * d;
+  const double column = 2.0 * d;
+  const bool three = dimension == 3;
+
+  if (container.kind == ContainerKind::Periodic) {
+    const double lx = container.size_x, ly = three ? container.size_y : 0.0;
+    const double surface =
+        lowest_surface(grains, dimension, column, -0.5 * lx, 0.5 * lx, -0.5 * ly, 0.5 * ly);
+    m.slab = true;
+    m.window.lo = Vec3(-0.5 * lx, -0.5 * ly, margin);
+    m.window.hi = Vec3(0.5 * lx, 0.5 * ly, surface - margin);
+    m.window_volume = lx * (three ? ly : 1.0) * (m.window.hi.z() - m.window.lo.z());
+    if (!(m.window.hi.z() > m.window.lo.z())) {
+      m.note = fmt("bed too shallow for a bulk window: lowest surface column at z = %.4g m, margin %.4g m",
+                   surface, margin);
+      return m;
+    }
+    m.note = fmt("z-slab over the whole period, z in [%.6g, %.6g] m", m.window.lo.z(), m.window.hi.z());
+  } else {
+    // Lateral bounds of the window: the walls, or the extent of the grains, less the margin.
+    double bx0, bx1, by0 = 0.0, by1 = 0.0;
+    std::string how;
+    switch (container.kind) {
+      case ContainerKind::Box:
+        bx0 = -0.5 * container.size_x + margin, bx1 = -bx0;
+        by0 = -0.5 * container.size_y + margin, by1 = -by0;
+        break;
+      case ContainerKind::HeleShaw:
+        bx0 = -0.5 * container.size_x + margin, bx1 = -bx0;
+        by0 = -0.5 * container.gap, by1 = -by0;  // the plates are the cell itself: the window spans the gap
+        how = "; it spans the whole Hele-Shaw gap";
+        break;
+      case ContainerKind::Cylinder: {
+        double s = (container.radius - margin) / std::sqrt(2.0);  // square inscribed in the cylinder
+        bx0 = -s, bx1 = s, by0 = -s, by1 = s;
+        break;
+      }
+      default: {  // open floor: bounded by the grains themselves
+        bx0 = by0 = std::numeric_limits<double>::max();
+        bx1 = by1 = -bx0;
+        for (const Grain& g : grains) {
+          bx0 = std::min(bx0, g.x.x() - g.r), bx1 = std::max(bx1, g.x.x() + g.r);
+          by0 = std::min(by0, g.x.y() - g.r), by1 = std::max(by1, g.x.y() + g.r);
+        }
+        bx0 += margin, bx1 -= margin, by0 += margin, by1 -= margin;
+      }
+    }
+    if (!three) by0 = by1 = 0.0;
+    if (!(bx1 > bx0) || (three && !(by1 > by0))) {
+      m.note = "container too narrow for a bulk window";
+      return m;
+    }
+    double cx = options.has_centre ? std::clamp(options.centre_x, bx0, bx1) : 0.5 * (bx0 + bx1);
+    double cy = options.has_centre ? std::clamp(options.centre_y, by0, by1) : 0.5 * (by0 + by1);
+    if (!three) cy = 0.0;
+    // Shrink the window about the centre and keep the largest volume that fits under the surface.
+    constexpr int kSteps = 40;
+    double best = 0.0;
+    for (int k = kSteps; k >= 1; --k) {
+      const double f = double(k) / kSteps;
+      const double x0 = cx - f * (cx - bx0), x1 = cx + f * (bx1 - cx);
+      const double y0 = cy - f * (cy - by0), y1 = cy + f * (by1 - cy);
+      if (x1 - x0 < d || (three && y1 - y0 < d)) break;
+      const double top = lowest_surface(grains, dimension, column, x0, x1, y0, y1) - margin;
+      const double vol = (x1 - x0) * (three ? y1 - y0 : 1.0) * (top - margin);
+      if (top > margin && vol > best) {
+        best = vol;
+        m.window.lo = Vec3(x0, y0, margin);
+        m.window.hi = Vec3(x1, y1, top);
+        m.window_volume = vol;
+      }
+    }
+    if (best <= 0.0) {
+      m.note = "packing too shallow for a bulk window under the free surface";
+      return m;
+    }
+    m.note = fmt("box window x in [%.6g, %.6g] m", m.window.lo.x(), m.window.hi.x()) +
+             (three ? fmt(", y in [%.6g, %.6g] m", m.window.lo.y(), m.window.hi.y()) : "") +
+             fmt(", z in [%.6g, %.6g] m", m.window.lo.z(), m.window.hi.z()) + how;
+  }
+
+  m.packing_fraction = fill_fraction(grains, dimension, m);
+  std::vector<int> computed;
+  if (!coordination || coordination->size() != grains.size())
+    computed = coordination_numbers(grains, dimension, container, options.contact_tol);
+  const std::vector<int>& z = computed.empty() ? *coordination : computed;
+  std::int64_t total = 0;
+  for (std::size_t i = 0; i < grains.size(); ++i) {
+    const Vec3& x = grains[i].x;
+    bool inside = m.slab ? (x.z() >= m.window.lo.z() && x.z() <= m.window.hi.z())
+                         : in_window(x, dimension, m.window);
+    if (!inside) continue;
+    ++m.grains_in_window;
+    total += z[i];
+    if (static_cast<std::size_t>(z[i]) >= m.coordination_histogram.size())
+      m.coordination_histogram.resize(z[i] + 1, 0);
+    ++m.coordination_histogram[z[i]];
+  }
+  if (m.grains_in_window == 0) {
+    m.note += "; no grain centre inside the window";
+    return m;
+  }
+  m.mean_coordination = double(total) / double(m.grains_in_window);
+  m.valid = true;
+  return m;
+}
+
+namespace {
+
+struct ProfilePoint {
+  double distance, top;
+};
+
+// Highest grain per bin of `distance` (bins `width` wide); each point is that grain's own distance and top.
+std::vector<ProfilePoint> profile(const std::vector<ProfilePoint>& samples, double width) {
+  std::vector<ProfilePoint> best;
+  std::vector<bool> used;
+  for (const ProfilePoint& s : samples) {
+    std::size_t bin = static_cast<std::size_t>(s.distance / width);
+    if (bin >= best.size()) best.resize(bin + 1, {0.0, -1.0}), used.resize(bin + 1, false);
+    if (!used[bin] || s.top > best[bin].top) best[bin] = s, used[bin] = true;
+  }
+  std::vector<ProfilePoint> out;
+  for (std::size_t b = 0; b < best.size(); ++b)
+    if (used[b]) out.push_back(best[b]);
+  return out;
+}
+
+// Angle (degrees) of the least-squares line through the points whose top lies in [lo, hi].
+bool fit_angle(const std::vector<ProfilePoint>& points, double lo, double hi, double& angle, int& used) {
+  double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (const ProfilePoint& p : points) {
+    if (p.top < lo || p.top > hi) continue;
+    n += 1, sx += p.distance, sy += p.top, sxx += p.distance * p.distance, sxy += p.distance * p.top;
+  }
+  used += static_cast<int>(n);
+  const double den = n * sxx - sx * sx;
+  if (n < 3 || !(den > 0.0)) return false;
+  const double slope = (n * sxy - sx * sy) / den;
+  angle = std::atan(-slope) * 180.0 / kPi;
+  return true;
+}
+
+}  // namespace
+
+HeapMeasures heap_measures(const Grains& grains, int dimension, double source_x, double source_y) {
+  HeapMeasures h;
+  if (grains.empty()) {
+    h.note = "no grains";
+    return h;
+  }
+  const double width = 2.0 * max_radius(grains);
+  for (const Grain& g : grains) h.height = std::max(h.height, g.x.z() + g.r);
+  const double lo = 0.2 * h.height, hi = 0.8 * h.height;
+  if (dimension == 3) {
+    std::vector<ProfilePoint> samples;
+    samples.reserve(grains.size());
+    for (const Grain& g : grains)
+      samples.push_back({std::hypot(g.x.x() - source_x, g.x.y() - source_y), g.x.z() + g.r});
+    h.valid = fit_angle(profile(samples, width), lo, hi, h.angle_deg, h.profile_points);
+    if (!h.valid) h.note = "fewer than 3 radial profile points between 20% and 80% of the height";
+    return h;
+  }
+  std::vector<ProfilePoint> left, right;
+  for (const Grain& g : grains) {
+    const double dx = g.x.x() - source_x;
+    (dx < 0 ? left : right).push_back({std::abs(dx), g.x.z() + g.r});
+  }
+  const bool ok_left = fit_angle(profile(left, width), lo, hi, h.angle_left_deg, h.profile_points);
+  const bool ok_right = fit_angle(profile(right, width), lo, hi, h.angle_right_deg, h.profile_points);
+  h.valid = ok_left && ok_right;
+  if (h.valid) h.angle_deg = 0.5 * (h.angle_left_deg + h.angle_right_deg);
+  else h.note = "fewer than 3 profile points between 20% and 80% of the height on one side";
+  return h;
+}
+
+}  // namespace btr

@@ -1,0 +1,107 @@
+#pragma once
+// Uniform grid over x-y columns and height, with cells at least one largest diameter wide, so the
+// grains near a point are found in a constant number of cells whatever the number already placed.
+// Periodic containers wrap columns and report each grain with the shift of the image found.
+// An open floor has no footprint: the grid grows as the heap spreads.
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "btr/container.h"
+#include "btr/grain.h"
+
+namespace btr {
+
+class NeighbourGrid {
+ public:
+  NeighbourGrid(int dimension, const Container& container, double r_max);
+
+  void insert(std::int32_t index, const Vec3& x);
+
+  double cell() const { return h_; }
+
+  // f(index, shift, image) for every grain in the cells meeting [lo, hi]; shift is the periodic
+  // offset to add to the stored centre, image a small code telling images of one grain apart.
+  template <class F>
+  void visit_box(const Vec3& lo, const Vec3& hi, F&& f) const;
+
+  // Visits the cells of the columns meeting [x -+ reach] x [y -+ reach], layer by layer from the
+  // highest occupied layer down; before each layer calls keep_going(top of layer) and stops on false.
+  template <class F, class G>
+  void visit_column_down(double x, double y, double reach, double z_start, G&& keep_going, F&& f) const;
+
+ private:
+  struct Range { long lo, hi; };
+  Range x_range(double lo, double hi) const;
+  Range y_range(double lo, double hi) const;
+  long column_of(long ix, long iy) const { return (ix - ix0_) + nx_ * (iy - iy0_); }
+  void grow_to(long ix, long iy);
+  static long floor_div(long a, long b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+  template <class F>
+  void visit_cell_range(Range rx, Range ry, long iz_lo, long iz_hi, F&& f) const;
+
+  int dimension_;
+  bool periodic_;
+  bool grows_;       // open floor: the footprint is unknown in advance
+  double h_;         // cell height and nominal width
+  double hx_, hy_;   // cell widths (periodic: the period divided into whole cells)
+  double x0_, y0_;   // coordinate of column index 0
+  double period_x_ = 0.0, period_y_ = 0.0;
+  long ix0_ = 0, iy0_ = 0;  // index range held: [ix0, ix0 + nx)
+  long nx_ = 1, ny_ = 1;
+  std::vector<std::vector<std::int32_t>> heads_;  // per column, per layer: last grain inserted or -1
+  std::vector<std::int32_t> next_;                // per grain: the grain inserted before it in its cell
+};
+
+template <class F>
+void NeighbourGrid::visit_cell_range(Range rx, Range ry, long iz_lo, long iz_hi, F&& f) const {
+  for (long iy = ry.lo; iy <= ry.hi; ++iy) {
+    long wy = iy, ky = 0;
+    if (periodic_ && dimension_ == 3) { ky = floor_div(iy, ny_); wy = iy - ky * ny_; }
+    else if (iy < iy0_ || iy >= iy0_ + ny_) continue;
+    for (long ix = rx.lo; ix <= rx.hi; ++ix) {
+      long wx = ix, kx = 0;
+      if (periodic_) { kx = floor_div(ix, nx_); wx = ix - kx * nx_; }
+      else if (ix < ix0_ || ix >= ix0_ + nx_) continue;
+      const auto& column = heads_[column_of(wx, wy)];
+      const long top = std::min<long>(iz_hi, static_cast<long>(column.size()) - 1);
+      if (top < iz_lo) continue;
+      const Vec3 shift(kx * period_x_, ky * period_y_, 0.0);
+      const int image = static_cast<int>((kx + 4) * 9 + (ky + 4));
+      for (long iz = std::max(0L, iz_lo); iz <= top; ++iz)
+        for (std::int32_t i = column[iz]; i >= 0; i = next_[i]) f(i, shift, image);
+    }
+  }
+}
+
+template <class F>
+void NeighbourGrid::visit_box(const Vec3& lo, const Vec3& hi, F&& f) const {
+  visit_cell_range(x_range(lo.x(), hi.x()), y_range(lo.y(), hi.y()),
+                   static_cast<long>(std::floor(lo.z() / h_)), static_cast<long>(std::floor(hi.z() / h_)), f);
+}
+
+template <class F, class G>
+void NeighbourGrid::visit_column_down(double x, double y, double reach, double z_start, G&& keep_going,
+                                      F&& f) const {
+  Range rx = x_range(x - reach, x + reach), ry = y_range(y - reach, y + reach);
+  long top = -1;
+  for (long iy = ry.lo; iy <= ry.hi; ++iy) {
+    long wy = iy;
+    if (periodic_ && dimension_ == 3) wy = iy - floor_div(iy, ny_) * ny_;
+    else if (iy < iy0_ || iy >= iy0_ + ny_) continue;
+    for (long ix = rx.lo; ix <= rx.hi; ++ix) {
+      long wx = ix;
+      if (periodic_) wx = ix - floor_div(ix, nx_) * nx_;
+      else if (ix < ix0_ || ix >= ix0_ + nx_) continue;
+      top = std::max<long>(top, static_cast<long>(heads_[column_of(wx, wy)].size()) - 1);
+    }
+  }
+  top = std::min<long>(top, static_cast<long>(std::floor(z_start / h_)));
+  for (long iz = top; iz >= 0; --iz) {
+    if (!keep_going((iz + 1) * h_)) return;
+    visit_cell_range(rx, ry, iz, iz, f);
+  }
+}
+
+}  // namespace btr

@@ -1,0 +1,33 @@
+#include "btr/run_scene.h"
+
+#include <chrono>
+#include <stdexcept>
+#include <string>
+
+#include "btr/deposition.h"
+#include "btr/drops.h"
+
+namespace btr {
+
+RunResult run_scene(const Scene& scene, std::uint64_t seed, std::int64_t count,
+                    const std::function<void(std::int64_t done, std::int64_t total)>& progress) {
+  if (count < 1) throw std::invalid_argument("run_scene: count must be >= 1, got " + std::to_string(count));
+  const auto start = std::chrono::steady_clock::now();
+  Scene s = scene;
+  s.grains.count = count;
+  DropSequence drops(s, seed);
+  Deposition deposition(s.dimension, s.container, drops.r_max());
+  const std::int64_t total = drops.count();
+  constexpr std::int64_t kProgressEvery = 256;
+  for (std::int64_t i = 0; i < total; ++i) {
+    deposition.place(drops.next());
+    if (progress && (i + 1) % kProgressEvery == 0) progress(i + 1, total);
+  }
+  if (progress) progress(total, total);
+  RunResult result;
+  result.grains = deposition.grains();
+  result.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace btr

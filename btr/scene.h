@@ -1,0 +1,76 @@
+#pragma once
+// A scene: everything one use case needs, read from a TOML file in inputs/ (see scene_toml.h).
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "container.h"
+
+namespace btr {
+
+// How the radii of one component are drawn.
+struct RadiusSpec {
+  enum class Kind { Constant, Uniform, ConstantMass, List };
+  Kind kind = Kind::Constant;
+  double value = 0.0;           // constant
+  double min = 0.0, max = 0.0;  // uniform, constant-mass (Eq. 1 of the BTR paper)
+  std::vector<double> list;     // list: radii used in order, cycling
+};
+
+// Contact material of one species (used by the DEM stage only).
+struct Material {
+  double young = 5e6;        // Pa
+  double poisson = 0.3;
+  double restitution = 0.5;
+  double friction = 0.5;
+  double rolling_friction = 0.0;  // 0 = off
+};
+
+// One component of the grain mixture; a monodisperse or polydisperse scene has exactly one.
+struct Component {
+  int species = 1;
+  double fraction = 1.0;  // number or volume fraction (see Grains::fraction_by)
+  double density = 2500.0;  // kg/m^3
+  RadiusSpec radius;
+  Material material;
+};
+
+struct GrainsSpec {
+  std::int64_t count = 0;
+  enum class FractionBy { Number, Volume };
+  FractionBy fraction_by = FractionBy::Number;
+  std::vector<Component> components;  // at least one
+};
+
+struct SourceSpec {
+  enum class Kind { Point, Rain, Region, List };
+  Kind kind = Kind::Rain;
+  double x = 0.0, y = 0.0;      // point: drop position
+  double scatter = 0.0;         // point: drops are spread uniformly over a disk of this radius [m]
+  double x_min = 0, x_max = 0;  // region
+  double y_min = 0, y_max = 0;  // region (3D)
+  std::string file;             // list: CSV "x,y,r" (3D) or "x,r" (2D), resolved against the scene's folder
+};
+
+struct RelaxSpec {
+  std::string engine = "liggghts";  // liggghts | yade
+  std::string model = "hertz";      // hertz | hooke
+  double max_time = 0.2;            // s
+  double stop_kinetic_ratio = 1e-6; // stop when kinetic energy < ratio * sum_i m_i g d_i
+  double timestep_fraction = 0.2;   // of the Rayleigh / contact time
+  std::optional<double> timestep;   // requested step; refused if above the stable one
+};
+
+struct Scene {
+  std::string name;
+  std::string file;  // path it was read from
+  int dimension = 3;
+  std::uint64_t seed = 1;
+  GrainsSpec grains;
+  Container container;
+  SourceSpec source;
+  RelaxSpec relax;
+};
+
+}  // namespace btr

@@ -1,0 +1,452 @@
+#include "btr/scene_toml.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <optional>
+#include <set>
+#include <toml++/toml.h>
+
+#include "btr/drop_list.h"
+#include "btr/toml_reader.h"
+
+namespace btr {
+namespace {
+
+using namespace toml_reader;
+
+const auto positive = [](double v) { return v > 0.0; };
+const auto non_negative = [](double v) { return v >= 0.0; };
+const auto any = [](double) { return true; };
+
+// Everything parsed from the file plus what the cross-checks need to point at.
+class SceneParser {
+ public:
+  SceneParser(const std::string& path, const toml::table& root) : rd_(path), path_(path) {
+    root_ = Section{&root, "", "the top level of the file", 0};
+  }
+
+  Scene parse() {
+    rd_.check_keys(root_, {"scene", "grains", "container", "source", "material", "relax"});
+    scene_.file = path_;
+    parse_scene(required_table("scene"));
+    auto material = rd_.table(root_, "material", "[material]");
+    Material defaults = material ? parse_material(*material, Material{}) : Material{};
+    parse_relax();
+    Section container = required_table("container");
+    Section source = required_table("source");
+    const std::string source_kind = rd_.required_choice(source, "kind", {"point", "rain", "region", "list"});
+    list_source_ = source_kind == "list";
+    Section grains = required_table("grains");
+    parse_grains(grains, defaults);
+    parse_container(container);
+    parse_source(source, source_kind);
+    finish_list_source(grains);
+    check_container_holds_grains(container);
+    check_source_fits(source);
+    return scene_;
+  }
+
+ private:
+  Reader rd_;
+  std::string path_;
+  Section root_;
+  Scene scene_;
+  bool list_source_ = false;
+  std::vector<ListedDrop> listed_;
+  double r_max_ = 0.0;
+  int dim() const { return scene_.dimension; }
+
+  Section required_table(const std::string& key) {
+    auto t = rd_.table(root_, key, "[" + key + "]");
+    if (!t) rd_.fail(0, "missing table [" + key + "]");
+    return *t;
+  }
+
+  void parse_scene(const Section& s) {
+    rd_.check_keys(s, {"name", "dimension", "seed"});
+    scene_.name = rd_.string(s, "name", "a non-empty string")
+                      .value_or(std::filesystem::path(path_).stem().string());
+    auto d = rd_.integer(s, "dimension", [](std::int64_t v) { return v == 2 || v == 3; }, "2 or 3");
+    if (!d) rd_.missing(s, "dimension", "2 or 3");
+    scene_.dimension = static_cast<int>(*d);
+    scene_.seed = static_cast<std::uint64_t>(
+        rd_.integer(s, "seed", [](std::int64_t v) { return v >= 0; }, "an integer >= 0").value_or(1));
+  }
+
+  Material parse_material(const Section& s, const Material& base) {
+    rd_.check_keys(s, {"young", "poisson", "restitution", "friction", "rolling_friction"});
+    Material m = base;
+    m.young = rd_.number_or(s, "young", base.young, positive, "a positive Young's modulus [Pa]");
+    m.poisson = rd_.number_or(s, "poisson", base.poisson, [](double v) { return v > -1.0 && v < 0.5; },
+                              "a Poisson ratio in (-1, 0.5)");
+    m.restitution = rd_.number_or(s, "restitution", base.restitution,
+                                  [](double v) { return v > 0.0 && v <= 1.0; }, "a restitution in (0, 1]");
+    m.friction = rd_.number_or(s, "friction", base.friction, non_negative, "a friction coefficient >= 0");
+    m.rolling_friction = rd_.number_or(s, "rolling_friction", base.rolling_friction, non_negative,
+                                       "a rolling friction coefficient >= 0 (0 = off)");
+    return m;
+  }
+
+  void parse_relax() {
+    auto s = rd_.table(root_, "relax", "[relax]");
+    if (!s) return;
+    rd_.check_keys(*s, {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep"});
+    RelaxSpec& r = scene_.relax;
+    r.engine = rd_.choice(*s, "engine", {"liggghts", "yade"}).value_or(r.engine);
+    r.model = rd_.choice(*s, "model", {"hertz", "hooke"}).value_or(r.model);
+    r.max_time = rd_.number_or(*s, "max_time", r.max_time, positive, "a positive time [s]");
+    r.stop_kinetic_ratio = rd_.number_or(*s, "stop_kinetic_ratio", r.stop_kinetic_ratio, positive,
+                                         "a positive ratio");
+    r.timestep_fraction = rd_.number_or(*s, "timestep_fraction", r.timestep_fraction,
+                                        [](double v) { return v > 0.0 && v <= 1.0; }, "a fraction in (0, 1]");
+    if (auto t = rd_.number(*s, "timestep", positive, "a positive time step [s]")) r.timestep = *t;
+  }
+
+  RadiusSpec parse_radius(const Section& s) {
+    rd_.check_keys(s, {"distribution", "value", "min", "max", "values"});
+    const std::string kind = rd_.required_choice(s, "distribution", {"constant", "uniform", "constant-mass", "list"});
+    const std::string why = "by distribution = " + quoted(kind);
+    RadiusSpec r;
+    if (kind == "constant") {
+      r.kind = RadiusSpec::Kind::Constant;
+      for (const char* k : {"min", "max", "values"}) rd_.forbid(s, k, why + " (it takes: value)");
+      r.value = rd_.required_number(s, "value", positive, "a positive radius [m]");
+    } else if (kind == "list") {
+      r.kind = RadiusSpec::Kind::List;
+      for (const char* k : {"value", "min", "max"}) rd_.forbid(s, k, why + " (it takes: values)");
+      auto v = rd_.numbers(s, "values", 0, positive, "a non-empty array of positive radii [m]");
+      if (!v) rd_.missing(s, "values", "a non-empty array of positive radii [m]");
+      r.list = *v;
+    } else {
+      r.kind = kind == "uniform" ? RadiusSpec::Kind::Uniform : RadiusSpec::Kind::ConstantMass;
+      for (const char* k : {"value", "values"}) rd_.forbid(s, k, why + " (it takes: min, max)");
+      r.min = rd_.required_number(s, "min", positive, "a positive radius [m]");
+      r.max = rd_.required_number(s, "max", [&](double v) { return v > r.min; },
+                                  "a radius [m] larger than min = " + fmt(r.min));
+    }
+    return r;
+  }
+
+  static double largest(const RadiusSpec& r) {
+    switch (r.kind) {
+      case RadiusSpec::Kind::Constant: return r.value;
+      case RadiusSpec::Kind::List: return *std::max_element(r.list.begin(), r.list.end());
+      default: return r.max;
+    }
+  }
+
+  void parse_grains(const Section& s, const Material& material) {
+    rd_.check_keys(s, {"count", "density", "radius", "fraction_by", "component"});
+    GrainsSpec& g = scene_.grains;
+    const std::string why_list = "with source.kind = \"list\" (the file gives each drop's radius and species)";
+    auto count = rd_.integer(s, "count", [](std::int64_t v) { return v > 0; }, "a positive integer");
+    if (!count && !list_source_) rd_.missing(s, "count", "a positive integer");
+    g.count = count.value_or(0);
+    const double density = rd_.number_or(s, "density", 2500.0, positive, "a positive density [kg/m^3]");
+    std::optional<RadiusSpec> radius;
+    if (list_source_) rd_.forbid(s, "radius", why_list);
+    if (auto r = rd_.table(s, "radius", "grains.radius")) radius = parse_radius(*r);
+    if (list_source_) rd_.forbid(s, "fraction_by", why_list);
+    const std::string by = rd_.choice(s, "fraction_by", {"number", "volume"}).value_or("number");
+    g.fraction_by = by == "volume" ? GrainsSpec::FractionBy::Volume : GrainsSpec::FractionBy::Number;
+
+    auto comp_node = rd_.get(s, "component");
+    if (!comp_node) {
+      Component c;
+      c.density = density;
+      c.material = material;
+      if (!radius && !list_source_)
+        rd_.missing(s, "radius", "a table such as { distribution = \"constant\", value = 1e-3 }");
+      if (radius) c.radius = *radius;
+      g.components = {c};
+      return;
+    }
+    auto arr = comp_node->as_array();
+    if (!arr || arr->empty() || !arr->is_array_of_tables())
+      rd_.bad_value(s, "component", *comp_node, "an array of tables ([[grains.component]] entries)");
+    const std::int64_t K = static_cast<std::int64_t>(arr->size());
+    std::set<std::int64_t> seen;
+    double sum = 0.0;
+    for (std::size_t i = 0; i < arr->size(); ++i) {
+      const auto& node = *arr->get(i);
+      const std::string name = "grains.component#" + std::to_string(i + 1);
+      Section c{node.as_table(), name, "[[grains.component]] #" + std::to_string(i + 1), Reader::line_of(node)};
+      rd_.check_keys(c, {"species", "fraction", "density", "radius", "material"});
+      Component comp;
+      comp.species = static_cast<int>(
+          rd_.integer(c, "species", [&](std::int64_t v) { return v >= 1 && v <= K; },
+                      "a species id in 1.." + std::to_string(K))
+              .value_or(static_cast<std::int64_t>(i + 1)));
+      if (!seen.insert(comp.species).second) {
+        auto n = rd_.get(c, "species");
+        rd_.fail(n ? Reader::line_of(*n) : c.line, name + ".species: expected distinct species ids 1.." +
+                                                       std::to_string(K) + ", got " +
+                                                       std::to_string(comp.species) + " twice");
+      }
+      if (list_source_) rd_.forbid(c, "fraction", why_list);
+      auto f = rd_.number(c, "fraction", [](double v) { return v >= 0.0 && v <= 1.0; }, "a fraction in [0, 1]");
+      if (!f && K > 1 && !list_source_) rd_.missing(c, "fraction", "a fraction in [0, 1] (the mixture has " +
+                                                                       std::to_string(K) + " components)");
+      comp.fraction = f.value_or(list_source_ ? 0.0 : 1.0);
+      sum += comp.fraction;
+      comp.density = rd_.number_or(c, "density", density, positive, "a positive density [kg/m^3]");
+      if (list_source_) rd_.forbid(c, "radius", why_list);
+      if (auto r = rd_.table(c, "radius", name + ".radius")) comp.radius = parse_radius(*r);
+      else if (radius) comp.radius = *radius;
+      else if (!list_source_)
+        rd_.missing(c, "radius", "a radius table (or a default grains.radius)");
+      auto m = rd_.table(c, "material", name + ".material");
+      comp.material = m ? parse_material(*m, material) : material;
+      g.components.push_back(comp);
+    }
+    if (!list_source_ && std::abs(sum - 1.0) > 1e-9)
+      rd_.fail(Reader::line_of(*arr->get(0)),
+               "grains.component: expected fractions summing to 1 (within 1e-9), got a sum of " + fmt(sum));
+  }
+
+  void parse_container(const Section& s) {
+    rd_.check_keys(s, {"kind", "size", "gap", "radius", "height"});
+    Container& c = scene_.container;
+    const std::string kind = rd_.required_choice(s, "kind", {"open", "box", "periodic", "hele-shaw", "cylinder"});
+    if (dim() == 2 && (kind == "hele-shaw" || kind == "cylinder"))
+      rd_.fail(Reader::line_of(*rd_.get(s, "kind")),
+               "container.kind: expected \"open\", \"box\" or \"periodic\" for dimension 2 (" + kind +
+                   " is 3D only), got " + quoted(kind));
+    c.kind = kind == "open"       ? ContainerKind::Open
+             : kind == "box"      ? ContainerKind::Box
+             : kind == "periodic" ? ContainerKind::Periodic
+             : kind == "hele-shaw" ? ContainerKind::HeleShaw
+                                   : ContainerKind::Cylinder;
+    const std::string why = "by kind = " + quoted(kind);
+    if (kind == "open" || kind == "cylinder") rd_.forbid(s, "size", why);
+    if (kind != "hele-shaw") rd_.forbid(s, "gap", why + " (only hele-shaw has a gap)");
+    if (kind != "cylinder") rd_.forbid(s, "radius", why + " (only cylinder has a radius)");
+    if (kind == "box" || kind == "periodic" || kind == "hele-shaw") {
+      const std::size_t n = (kind == "hele-shaw" || dim() == 2) ? 1 : 2;
+      const std::string expect =
+          kind == "hele-shaw" ? "[x]: the cell length [m] (the plate distance is container.gap)"
+          : n == 1            ? "[x] for dimension 2: the positive width [m]"
+                              : "[x, y] for dimension 3: positive widths [m]";
+      auto size = rd_.numbers(s, "size", n, positive, expect);
+      if (!size) rd_.missing(s, "size", expect);
+      c.size_x = (*size)[0];
+      if (n == 2) c.size_y = (*size)[1];
+    }
+    if (kind == "hele-shaw") c.gap = rd_.required_number(s, "gap", positive, "a positive plate distance w [m]");
+    if (kind == "cylinder") c.radius = rd_.required_number(s, "radius", positive, "a positive radius [m]");
+    c.height = rd_.number_or(s, "height", 0.0, positive, "a positive wall height [m]");
+  }
+
+  void parse_source(const Section& s, const std::string& kind) {
+    rd_.check_keys(s, {"kind", "position", "scatter", "x", "y", "file"});
+    SourceSpec& src = scene_.source;
+    const std::string why = "by kind = " + quoted(kind);
+    if (kind != "point") {
+      rd_.forbid(s, "position", why);
+      rd_.forbid(s, "scatter", why);
+    }
+    if (kind != "region") {
+      rd_.forbid(s, "x", why);
+      rd_.forbid(s, "y", why);
+    }
+    if (kind != "list") rd_.forbid(s, "file", why);
+    if (kind == "point") {
+      src.kind = SourceSpec::Kind::Point;
+      const std::string expect = dim() == 2 ? "[x] for dimension 2" : "[x, y] for dimension 3";
+      auto p = rd_.numbers(s, "position", dim() - 1, any, expect);
+      if (!p) rd_.missing(s, "position", expect);
+      src.x = (*p)[0];
+      src.y = dim() == 3 ? (*p)[1] : 0.0;
+      src.scatter = rd_.number_or(s, "scatter", 0.0, non_negative, "a radius >= 0 [m]");
+    } else if (kind == "rain") {
+      src.kind = SourceSpec::Kind::Rain;
+      if (scene_.container.kind == ContainerKind::Open)
+        rd_.fail(Reader::line_of(*rd_.get(s, "kind")),
+                 "source.kind: expected \"point\" or \"region\" on an open floor (rain needs a container "
+                 "footprint), got \"rain\"");
+    } else if (kind == "region") {
+      src.kind = SourceSpec::Kind::Region;
+      auto range = [&](const std::string& key) {
+        const std::string expect = "[min, max] with min < max [m]";
+        auto v = rd_.numbers(s, key, 2, any, expect);
+        if (!v) rd_.missing(s, key, expect);
+        if (!((*v)[0] < (*v)[1])) rd_.bad_value(s, key, *rd_.get(s, key), expect);
+        return *v;
+      };
+      auto x = range("x");
+      src.x_min = x[0], src.x_max = x[1];
+      if (dim() == 3) {
+        auto y = range("y");
+        src.y_min = y[0], src.y_max = y[1];
+      } else {
+        rd_.forbid(s, "y", "for dimension 2 (y = 0)");
+      }
+    } else {
+      src.kind = SourceSpec::Kind::List;
+      auto file = rd_.string(s, "file", "a CSV file name (relative to the scene file's folder)");
+      if (!file) rd_.missing(s, "file", "a CSV file name (relative to the scene file's folder)");
+      namespace fs = std::filesystem;
+      fs::path p(*file);
+      if (p.is_relative()) p = fs::path(path_).parent_path() / p;
+      src.file = p.lexically_normal().string();
+      if (!std::ifstream(src.file))
+        rd_.fail(Reader::line_of(*rd_.get(s, "file")), "source.file: cannot open '" + src.file + "'");
+      listed_ = read_drop_list(src.file, dim());
+    }
+  }
+
+  // A list source: the file decides the count, radii and species.
+  void finish_list_source(const Section& grains) {
+    GrainsSpec& g = scene_.grains;
+    if (list_source_) {
+      const auto rows = static_cast<std::int64_t>(listed_.size());
+      if (g.count > rows)
+        rd_.bad_value(grains, "count", *rd_.get(grains, "count"),
+                      "at most the " + std::to_string(rows) + " rows of " + scene_.source.file);
+      if (g.count == 0) g.count = rows;
+      listed_.resize(static_cast<std::size_t>(g.count));
+      for (auto& c : g.components) c.radius = RadiusSpec{RadiusSpec::Kind::List, 0.0, 0.0, 0.0, {}};
+      for (const auto& d : listed_) {
+        auto it = std::find_if(g.components.begin(), g.components.end(),
+                               [&](const Component& c) { return c.species == d.species; });
+        if (it == g.components.end())
+          throw SceneError(scene_.source.file + ":" + std::to_string(d.line) + ": species: expected one of the " +
+                           std::to_string(g.components.size()) + " species of the scene, got " +
+                           std::to_string(d.species));
+        it->radius.list.push_back(d.r);
+        r_max_ = std::max(r_max_, d.r);
+      }
+      return;
+    }
+    for (const auto& c : g.components) r_max_ = std::max(r_max_, largest(c.radius));
+  }
+
+  // Where the largest grain is named in messages.
+  std::string r_max_text() const { return "the largest grain (r_max = " + fmt(r_max_) + " m)"; }
+
+  void check_container_holds_grains(const Section& s) {
+    const Container& c = scene_.container;
+    const double d = 2.0 * r_max_;
+    auto line = [&](const char* key) { return Reader::line_of(*rd_.get(s, key)); };
+    switch (c.kind) {
+      case ContainerKind::Open: return;
+      case ContainerKind::Cylinder:
+        if (c.radius < r_max_)
+          rd_.fail(line("radius"), "container.radius: expected at least " + r_max_text() + ", got " + fmt(c.radius));
+        return;
+      case ContainerKind::HeleShaw:
+        if (c.gap < d)
+          rd_.fail(line("gap"), "container.gap: expected at least the diameter of " + r_max_text() + ", 2 r_max = " +
+                                    fmt(d) + " m, got " + fmt(c.gap));
+        [[fallthrough]];
+      default:
+        if (c.size_x < d || (dim() == 3 && c.kind != ContainerKind::HeleShaw && c.size_y < d))
+          rd_.fail(line("size"), "container.size: expected widths of at least the diameter of " + r_max_text() +
+                                     ", 2 r_max = " + fmt(d) + " m, got " + fmt(c.size_x) +
+                                     (dim() == 3 && c.kind != ContainerKind::HeleShaw ? ", " + fmt(c.size_y) : ""));
+    }
+  }
+
+  // Half-widths of the band of centres where a grain of radius r fits, along x and y (infinite: no wall).
+  std::pair<double, double> centre_band(double r) const {
+    const Container& c = scene_.container;
+    const double inf = std::numeric_limits<double>::infinity();
+    switch (c.kind) {
+      case ContainerKind::Box: return {c.size_x / 2 - r, c.size_y / 2 - r};
+      case ContainerKind::Periodic: return {c.size_x / 2, c.size_y / 2};
+      case ContainerKind::HeleShaw: return {c.size_x / 2 - r, c.gap / 2 - r};
+      default: return {inf, inf};
+    }
+  }
+
+  std::string allowed_text(double r) const {
+    if (scene_.container.kind == ContainerKind::Cylinder)
+      return "sqrt(x^2 + y^2) <= R - r = " + fmt(scene_.container.radius - r);
+    auto [bx, by] = centre_band(r);
+    std::string s = "x in [" + fmt(-bx) + ", " + fmt(bx) + "]";
+    if (dim() == 3) s += ", y in [" + fmt(-by) + ", " + fmt(by) + "]";
+    return s;
+  }
+
+  // A disk (3D) or segment (2D) of drop centres of radius `spread` about (x, y).
+  bool disk_fits(double x, double y, double spread, double r) const {
+    const Container& c = scene_.container;
+    if (c.kind == ContainerKind::Cylinder) return std::hypot(x, y) + spread <= c.radius - r;
+    if (c.kind == ContainerKind::Periodic) spread = 0.0;  // drops wrap around
+    auto [bx, by] = centre_band(r);
+    return std::abs(x) + spread <= bx && (dim() == 2 || std::abs(y) + spread <= by);
+  }
+
+  bool rect_fits(const SourceSpec& s, double r) const {
+    const Container& c = scene_.container;
+    const double ax = std::max(std::abs(s.x_min), std::abs(s.x_max));
+    const double ay = dim() == 3 ? std::max(std::abs(s.y_min), std::abs(s.y_max)) : 0.0;
+    if (c.kind == ContainerKind::Cylinder) return std::hypot(ax, ay) <= c.radius - r;
+    auto [bx, by] = centre_band(r);
+    return ax <= bx && (dim() == 2 || ay <= by);
+  }
+
+  void check_source_fits(const Section& s) {
+    const SourceSpec& src = scene_.source;
+    const std::string kind = to_string(scene_.container.kind);
+    switch (src.kind) {
+      case SourceSpec::Kind::Point:
+        if (!disk_fits(src.x, src.y, src.scatter, r_max_))
+          rd_.fail(Reader::line_of(*rd_.get(s, "position")),
+                   "source.position: expected drops (position +- scatter " + fmt(src.scatter) + ") that keep " +
+                       r_max_text() + " inside the " + kind + " container: " + allowed_text(r_max_) +
+                       (src.scatter > 0 && scene_.container.kind != ContainerKind::Periodic
+                            ? " minus the scatter"
+                            : "") +
+                       ", got [" + fmt(src.x) + (dim() == 3 ? ", " + fmt(src.y) : "") + "]");
+        return;
+      case SourceSpec::Kind::Region:
+        if (!rect_fits(src, r_max_)) {
+          const bool x_bad = [&] {
+            SourceSpec probe = src;
+            probe.y_min = probe.y_max = 0.0;
+            return !rect_fits(probe, r_max_);
+          }();
+          const bool both = scene_.container.kind == ContainerKind::Cylinder && !x_bad;  // only the corners
+          const std::string key = x_bad || dim() == 2 || both ? "x" : "y";
+          auto range = [&](double lo, double hi) { return "[" + fmt(lo) + ", " + fmt(hi) + "]"; };
+          const std::string got = both ? "x = " + range(src.x_min, src.x_max) + ", y = " + range(src.y_min, src.y_max)
+                                  : key == "x" ? range(src.x_min, src.x_max)
+                                               : range(src.y_min, src.y_max);
+          rd_.fail(Reader::line_of(*rd_.get(s, key)),
+                   (both ? "source.x, source.y" : "source." + key) + ": expected a region that keeps " +
+                       r_max_text() + " inside the " + kind + " container: " + allowed_text(r_max_) + ", got " + got);
+        }
+        return;
+      case SourceSpec::Kind::List:
+        for (const auto& d : listed_)
+          if (!disk_fits(d.x, d.y, 0.0, d.r))
+            throw SceneError(src.file + ":" + std::to_string(d.line) + ": expected a drop that keeps its grain (r = " +
+                             fmt(d.r) + " m) inside the " + kind + " container: " + allowed_text(d.r) + ", got x = " +
+                             fmt(d.x) + (dim() == 3 ? ", y = " + fmt(d.y) : ""));
+        return;
+      case SourceSpec::Kind::Rain: return;
+    }
+  }
+};
+
+}  // namespace
+
+Scene load_scene(const std::string& path) {
+  if (!std::ifstream(path)) throw SceneError(path + ": cannot open the scene file");
+  toml::table root;
+  try {
+    root = toml::parse_file(path);
+  } catch (const toml::parse_error& e) {
+    throw SceneError(path + ":" + std::to_string(e.source().begin.line) + ": TOML syntax error: " +
+                     std::string(e.description()));
+  }
+  return SceneParser(path, root).parse();
+}
+
+}  // namespace btr

@@ -1,0 +1,78 @@
+#pragma once
+// Reading a scene from a TOML file (inputs/*.toml).
+//
+// Scene file schema (SI units: m, kg, s, Pa). Unknown keys and tables anywhere are errors.
+//
+// [scene]                        required
+//   name       string            default: the file name without extension
+//   dimension  2 | 3             required. 2D: disks in the x-z plane (y = 0); 3D: spheres. z is up.
+//   seed       integer >= 0      default 1
+//
+// [grains]                       required
+//   count       integer > 0      required, except with source.kind = "list" (then: the file's row count;
+//                                a count larger than the file's row count is an error)
+//   density     kg/m^3 > 0       default for every component (default 2500)
+//   radius      table            default for every component; one of
+//                 { distribution = "constant", value = R }
+//                 { distribution = "uniform", min = A, max = B }          A < B, uniform in [A, B)
+//                 { distribution = "constant-mass", min = A, max = B }    Eq. 1 of the BTR paper:
+//                   R = A B / (B - u (B - A)), u uniform in [0, 1); number density ~ 1/R^2, i.e.
+//                   equal mass per radius interval for disks (2D); for spheres mass per dR grows ~ R.
+//                 { distribution = "list", values = [R1, R2, ...] }       used in order, cycling
+//               not allowed with source.kind = "list" (the file gives the radii)
+//   fraction_by "number" | "volume"   how component fractions are meant (default "number")
+//   [[grains.component]]        optional, one per species of a mixture:
+//     species   integer          1..K, distinct (default: position in the list, 1-based)
+//     fraction  number in [0,1]  required when K > 1; fractions must sum to 1 (within 1e-9)
+//     density   kg/m^3           default grains.density
+//     radius    table            as grains.radius; default grains.radius
+//     material  inline table     keys of [material]; each missing key falls back to [material]
+//
+// [container]                    required
+//   kind    "open" | "box" | "periodic" | "hele-shaw" | "cylinder"
+//           hele-shaw and cylinder are 3D only. Coordinates are centred on the z axis (container.h).
+//   size    box, periodic: [x] in 2D, [x, y] in 3D; hele-shaw: [x] (cell length). Not for open, cylinder.
+//   gap     hele-shaw only: plate distance w (>= the largest grain diameter)
+//   radius  cylinder only: inner radius (>= the largest grain radius)
+//   height  optional wall height for the DEM stage (> 0); omitted: derived from the packing
+//   Every lateral extent must hold the largest grain (2 r_max <= size, gap, 2 radius).
+//
+// [source]                       required
+//   kind "point":   position = [x] (2D) or [x, y] (3D), scatter >= 0 (default 0): drops are uniform on a
+//                   disk (3D) or segment (2D) of that radius about the position; the whole disk must let
+//                   the largest grain fit in the container (periodic: positions wrap into the domain).
+//   kind "rain":    uniform over the container footprint where each grain fits; not for "open".
+//   kind "region":  x = [min, max], and in 3D y = [min, max] (min < max): uniform over the rectangle,
+//                   which must let the largest grain fit in the container.
+//   kind "list":    file = "drops.csv" (relative to the scene file's folder): rows "x,y,r" (3D) or "x,r"
+//                   (2D), optionally a last column "species"; an optional header row naming the
+//                   columns; blank lines and lines starting with '#' are skipped. Drops are used in order.
+//
+// [material]                     optional; defaults for every component
+//   young > 0 (default 5e6), poisson in (-1, 0.5) (0.3), restitution in (0, 1] (0.5),
+//   friction >= 0 (0.5), rolling_friction >= 0 (0 = off)
+//
+// [relax]                        optional
+//   engine "liggghts" | "yade" (liggghts), model "hertz" | "hooke" (hertz), max_time > 0 [s] (0.2),
+//   stop_kinetic_ratio > 0 (1e-6), timestep_fraction in (0, 1] (0.2), timestep > 0 [s] (optional)
+//
+// Errors name the file, the line, the key and what was expected, e.g.
+//   inputs/x.toml:12: grains.count: expected a positive integer, got 0
+//   inputs/x.toml:7: unknown key 'sise' in [container]; allowed: kind, size, gap, radius, height
+#include <stdexcept>
+#include <string>
+
+#include "btr/scene.h"
+
+namespace btr {
+
+class SceneError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Reads and validates a scene. Scene::file is `path` as given; a list source's file is stored
+// resolved against the scene's folder. Throws SceneError.
+Scene load_scene(const std::string& path);
+
+}  // namespace btr

@@ -1,0 +1,83 @@
+#include "btr/walls.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace btr {
+namespace {
+
+Obstacle plane(int number, const Vec3& normal, double offset) {
+  Obstacle o;
+  o.kind = Obstacle::Kind::Plane;
+  o.key = -1 - number;
+  o.c = normal;
+  o.R = offset;
+  return o;
+}
+
+}  // namespace
+
+std::vector<Obstacle> container_walls(const Container& c, int dimension, double r) {
+  std::vector<Obstacle> walls;
+  walls.push_back(plane(0, Vec3::UnitZ(), r));  // the floor: z = r
+  auto x_walls = [&](double half) {
+    walls.push_back(plane(1, Vec3::UnitX(), -half + r));
+    walls.push_back(plane(2, -Vec3::UnitX(), -(half - r)));
+  };
+  auto y_walls = [&](double half) {
+    walls.push_back(plane(3, Vec3::UnitY(), -half + r));
+    walls.push_back(plane(4, -Vec3::UnitY(), -(half - r)));
+  };
+  switch (c.kind) {
+    case ContainerKind::Open:
+    case ContainerKind::Periodic:
+      break;
+    case ContainerKind::Box:
+      x_walls(0.5 * c.size_x);
+      if (dimension == 3) y_walls(0.5 * c.size_y);
+      break;
+    case ContainerKind::HeleShaw:
+      x_walls(0.5 * c.size_x);
+      y_walls(0.5 * c.gap);
+      break;
+    case ContainerKind::Cylinder: {
+      Obstacle o;
+      o.kind = Obstacle::Kind::Cylinder;
+      o.key = -6;
+      o.R = c.radius - r;
+      walls.push_back(o);
+      break;
+    }
+  }
+  return walls;
+}
+
+std::string drop_misfit(const Container& c, int dimension, double x, double y, double r) {
+  std::ostringstream why;
+  const double slack = 1e-12 * r;
+  auto check = [&](double v, double half, const char* axis) {
+    if (std::abs(v) > half - r + slack)
+      why << axis << " = " << v << " puts a grain of radius " << r << " through the wall at +-" << half << "; ";
+  };
+  switch (c.kind) {
+    case ContainerKind::Open:
+    case ContainerKind::Periodic:
+      break;
+    case ContainerKind::Box:
+      check(x, 0.5 * c.size_x, "x");
+      if (dimension == 3) check(y, 0.5 * c.size_y, "y");
+      break;
+    case ContainerKind::HeleShaw:
+      check(x, 0.5 * c.size_x, "x");
+      check(y, 0.5 * c.gap, "y");
+      break;
+    case ContainerKind::Cylinder:
+      if (std::hypot(x, y) > c.radius - r + slack)
+        why << "(x, y) = (" << x << ", " << y << ") puts a grain of radius " << r
+            << " through the cylinder of radius " << c.radius;
+      break;
+  }
+  return why.str();
+}
+
+}  // namespace btr

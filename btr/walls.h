@@ -1,0 +1,17 @@
+#pragma once
+// The container as obstacles for a grain of radius r: the floor, flat walls and the cylinder.
+#include <string>
+#include <vector>
+
+#include "btr/container.h"
+#include "btr/obstacle.h"
+
+namespace btr {
+
+// Floor first, then the side walls of the container (periodic and open containers have none).
+std::vector<Obstacle> container_walls(const Container& container, int dimension, double r);
+
+// Empty when a grain of radius r dropped at (x, y) fits the container's footprint, else why not.
+std::string drop_misfit(const Container& container, int dimension, double x, double y, double r);
+
+}  // namespace btr

@@ -1,0 +1,45 @@
+#pragma once
+// What relax.cpp needs from each engine: write its inputs, say how to run them, read the result back.
+// One implementation per engine: liggghts_adapter.cpp, yade_adapter.cpp.
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "coupling/relax.h"
+
+namespace btr {
+
+// The numbers every engine input is built from, computed once by relax.cpp.
+struct RelaxPlan {
+  double timestep = 0.0;        // s, already checked against the stable step
+  std::string timestep_rule;    // one line, e.g. "Rayleigh time 1.2e-5 s x 0.2 (Hertz, smallest grain)"
+  double max_time = 0.0;        // simulated seconds
+  double kinetic_threshold = 0.0;  // J: stop when the total kinetic energy falls below this
+  double largest_overlap = 0.0;    // of the input packing, relative to the smaller radius
+};
+
+struct EngineCommand {
+  std::vector<std::string> argv;            // argv[0] is looked up on PATH
+  std::map<std::string, std::string> env;   // added to the environment
+};
+
+class EngineAdapter {
+ public:
+  virtual ~EngineAdapter() = default;
+  // Writes every input file into dir (which exists); returns their paths.
+  virtual std::vector<std::string> write_inputs(const Packing& packing, const Scene& scene,
+                                                const RelaxSettings& settings, const RelaxPlan& plan,
+                                                const std::string& dir) const = 0;
+  virtual EngineCommand command(const std::string& dir, const RelaxSettings& settings) const = 0;
+  // The engine's own log file inside dir (kept; its tail goes into failure messages).
+  virtual std::string log_file(const std::string& dir) const = 0;
+  // Reads the outputs in dir; throws EngineFailure if they show a failed run.
+  virtual RelaxResult read_back(const std::string& dir, const Packing& original, const Scene& scene,
+                                const RelaxPlan& plan) const = 0;
+};
+
+std::unique_ptr<EngineAdapter> make_liggghts_adapter();
+std::unique_ptr<EngineAdapter> make_yade_adapter();
+
+}  // namespace btr

@@ -1,0 +1,49 @@
+// The LIGGGHTS engine: inputs from liggghts_script.cpp, result from liggghts_readback.cpp.
+#include <unistd.h>
+
+#include <filesystem>
+
+#include "coupling/engine_adapter.h"
+#include "coupling/liggghts_readback.h"
+#include "coupling/liggghts_script.h"
+
+namespace btr {
+
+namespace {
+
+class LiggghtsAdapter : public EngineAdapter {
+ public:
+  std::vector<std::string> write_inputs(const Packing& packing, const Scene& scene, const RelaxSettings&,
+                                        const RelaxPlan& plan, const std::string& dir) const override {
+    return write_liggghts_inputs(packing, scene, plan, dir);
+  }
+
+  EngineCommand command(const std::string&, const RelaxSettings& settings) const override {
+    EngineCommand c;
+    if (settings.np > 1) {
+      c.argv = {"mpirun", "-np", std::to_string(settings.np)};
+      if (::geteuid() == 0) {  // OpenMPI refuses to run as root without both of these
+        c.env["OMPI_ALLOW_RUN_AS_ROOT"] = "1";
+        c.env["OMPI_ALLOW_RUN_AS_ROOT_CONFIRM"] = "1";
+      }
+    }
+    for (const char* a : {"liggghts", "-in", kLiggghtsScript, "-log", kLiggghtsLog, "-screen", "none", "-echo", "none"})
+      c.argv.push_back(a);
+    return c;
+  }
+
+  std::string log_file(const std::string& dir) const override {
+    return (std::filesystem::path(dir) / kLiggghtsLog).string();
+  }
+
+  RelaxResult read_back(const std::string& dir, const Packing& original, const Scene& scene,
+                        const RelaxPlan&) const override {
+    return read_liggghts_result(dir, original, scene);
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<EngineAdapter> make_liggghts_adapter() { return std::make_unique<LiggghtsAdapter>(); }
+
+}  // namespace btr

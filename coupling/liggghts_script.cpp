@@ -1,0 +1,327 @@
+// Writes the LIGGGHTS inputs: btr.data (read_data, atom_style granular) and in.btr (the script).
+// Syntax checked against the LIGGGHTS 3.8 manual (liggghts-doc) and by running liggghts.
+#include "coupling/liggghts_script.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <sstream>
+
+#include "coupling/dem_walls.h"
+#include "coupling/materials.h"
+#include "coupling/relax_plan.h"
+#include "coupling/text_file.h"
+#include "coupling/timestep.h"
+
+namespace btr {
+
+namespace {
+
+constexpr long kChecksOverMaxTime = 500;  // thermo samples / stop checks over max_time
+constexpr long kAveragedSamples = 100;    // samples in each averaging window
+
+std::string g17(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+std::string g6(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+// The simulation box: periodic where the container is, fixed at the walls, shrink-wrapped where the
+// container is open (laterally for "open", upwards for every container).
+struct Box {
+  double lo[3], hi[3];
+  std::string boundary;
+};
+
+Box make_box(const Grains& grains, int dimension, const Container& c) {
+  double lo[3], hi[3], r_max = 0.0;
+  for (int a = 0; a < 3; ++a) lo[a] = std::numeric_limits<double>::infinity(), hi[a] = -lo[a];
+  for (const Grain& g : grains) {
+    r_max = std::max(r_max, g.r);
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], g.x[a] - g.r), hi[a] = std::max(hi[a], g.x[a] + g.r);
+  }
+  Box b;
+  std::string bx, by;
+  auto set = [&](int a, double l, double h) { b.lo[a] = l, b.hi[a] = h; };
+  switch (c.kind) {
+    case ContainerKind::Open:
+      bx = "m", by = "m";
+      set(0, lo[0] - r_max, hi[0] + r_max);
+      set(1, lo[1] - r_max, hi[1] + r_max);
+      break;
+    case ContainerKind::Periodic:
+      bx = "p", by = "p";
+      set(0, -0.5 * c.size_x, 0.5 * c.size_x);
+      set(1, -0.5 * c.size_y, 0.5 * c.size_y);
+      break;
+    case ContainerKind::Box:
+      bx = "f", by = "f";
+      set(0, -0.5 * c.size_x, 0.5 * c.size_x);
+      set(1, -0.5 * c.size_y, 0.5 * c.size_y);
+      break;
+    case ContainerKind::HeleShaw:
+      bx = "f", by = "f";
+      set(0, -0.5 * c.size_x, 0.5 * c.size_x);
+      set(1, -0.5 * c.gap, 0.5 * c.gap);
+      break;
+    case ContainerKind::Cylinder:
+      bx = "f", by = "f";
+      set(0, -c.radius, c.radius);
+      set(1, -c.radius, c.radius);
+      break;
+  }
+  if (dimension == 2) {  // one layer of spheres in y = 0: a fixed slab one largest diameter thick
+    by = "f";
+    set(1, -r_max, r_max);
+  }
+  // The floor is the lower boundary; the top is shrink-wrapped (grains may rise) from a start above
+  // the highest grain.
+  set(2, 0.0, hi[2] + 2.0 * r_max);
+  b.boundary = bx + " " + by + " fm";
+  return b;
+}
+
+// "peratomtype" list and "peratomtypepair" matrix over the types 1..K (components) and K+1 (walls).
+struct TypeTable {
+  std::vector<Material> type_material;  // per type, 0-based
+  int wall_type = 0;                    // 1-based
+};
+
+TypeTable make_types(const Scene& scene) {
+  TypeTable t;
+  for (const Component& c : scene.grains.components) t.type_material.push_back(c.material);
+  t.type_material.push_back(wall_material(scene));
+  t.wall_type = static_cast<int>(t.type_material.size());
+  return t;
+}
+
+template <class Get>
+std::string per_type(const TypeTable& t, Get get) {
+  std::string s;
+  for (const Material& m : t.type_material) s += " " + g17(get(m));
+  return s;
+}
+
+// Pair values: unlike species mix (pair_material); a wall contact takes the grain's value.
+template <class Get>
+std::string per_type_pair(const TypeTable& t, Get get) {
+  const int n = static_cast<int>(t.type_material.size());
+  std::string s = " " + std::to_string(n);
+  for (int i = 1; i <= n; ++i)
+    for (int j = 1; j <= n; ++j) {
+      const Material& a = t.type_material[i - 1];
+      const Material& b = t.type_material[j - 1];
+      double v;
+      if (i == t.wall_type && j == t.wall_type) v = get(a);
+      else if (i == t.wall_type) v = get(b);
+      else if (j == t.wall_type) v = get(a);
+      else v = get(pair_material(a, b));
+      s += " " + g17(v);
+    }
+  return s;
+}
+
+std::string wall_geometry(const DemWall& w) {
+  if (w.kind == DemWall::Kind::Cylinder) return "zcylinder " + g17(w.position) + " 0 0";
+  static const char* axis_plane[] = {"xplane", "yplane", "zplane"};
+  return std::string(axis_plane[w.axis]) + " " + g17(w.position);
+}
+
+// Dump columns that give the normal force of each wall on each grain (store_force yes).
+std::vector<std::string> wall_force_columns(const DemWall& w) {
+  const std::string f = "f_force_" + liggghts_wall_id(w.name);
+  if (w.kind == DemWall::Kind::Cylinder) return {f + "[1]", f + "[2]"};
+  return {f + "[" + std::to_string(w.axis + 1) + "]"};
+}
+
+std::string data_file(const Packing& packing, const Scene& scene, const Box& box, int n_types) {
+  std::ostringstream out;
+  out << "LIGGGHTS data file written by btr-dem: packing of scene '" << scene.name << "' (atom_style granular)\n\n";
+  out << packing.grains.size() << " atoms\n" << n_types << " atom types\n\n";
+  static const char* names[] = {"xlo xhi", "ylo yhi", "zlo zhi"};
+  for (int a = 0; a < 3; ++a) out << g17(box.lo[a]) << " " << g17(box.hi[a]) << " " << names[a] << "\n";
+  out << "\nAtoms\n\n";
+  char row[256];
+  for (std::size_t i = 0; i < packing.grains.size(); ++i) {
+    const Grain& g = packing.grains[i];
+    const int ci = component_index(scene, g.species);
+    // id type diameter density x y z
+    std::snprintf(row, sizeof row, "%zu %d %.17g %.17g %.17g %.17g %.17g\n", i + 1, ci + 1, 2.0 * g.r,
+                  scene.grains.components[ci].density, g.x.x(), g.x.y(), g.x.z());
+    out << row;
+  }
+  return out.str();
+}
+
+}  // namespace
+
+std::string liggghts_wall_id(const std::string& wall_name) {
+  std::string id = "btr_wall_";
+  for (char c : wall_name) {
+    if (c == '-') id += "lo";
+    else if (c == '+') id += "hi";
+    else id += c;
+  }
+  return id;
+}
+
+LiggghtsSchedule liggghts_schedule(const Grains& grains, const Scene& scene, const RelaxPlan& plan) {
+  LiggghtsSchedule s;
+  const double total = std::ceil(plan.max_time / plan.timestep);
+  s.average_every = std::max(1L, static_cast<long>(std::ceil(total / double(kChecksOverMaxTime * kAveragedSamples))));
+  s.steps_per_check = s.average_every * kAveragedSamples;
+  s.max_checks = std::max(1L, static_cast<long>(std::ceil(total / double(s.steps_per_check))));
+  s.arming_time = stop_arming_time(grains);
+  s.blowup_bound = kinetic_energy_bound(grains, scene);
+  return s;
+}
+
+std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Scene& scene, const RelaxPlan& plan,
+                                               const std::string& dir) {
+  const int dim = scene.dimension;
+  const Grains& grains = packing.grains;
+  const std::vector<DemWall> walls = dem_walls(scene.container, dim);
+  const Box box = make_box(grains, dim, scene.container);
+  const TypeTable types = make_types(scene);
+  const LiggghtsSchedule sched = liggghts_schedule(grains, scene, plan);
+  const int n_types = static_cast<int>(types.type_material.size());
+
+  double r_min = std::numeric_limits<double>::infinity(), y_min = r_min, y_max = 0.0;
+  for (const Grain& g : grains) r_min = std::min(r_min, g.r);
+  for (const Material& m : types.type_material) y_min = std::min(y_min, m.young), y_max = std::max(y_max, m.young);
+
+  const bool hooke = scene.relax.model == "hooke";
+  const bool rolling = uses_rolling_friction(scene);
+  const std::string models = std::string("model ") + (hooke ? "hooke" : "hertz") + " tangential history" +
+                             (rolling ? " rolling_friction epsd2" : "");
+
+  std::ostringstream s;
+  s << "# btr-dem: LIGGGHTS relaxation of a BTR packing of scene '" << scene.name << "'\n"
+    << "# " << grains.size() << " grains, " << dim << "D, container " << to_string(scene.container.kind) << "\n"
+    << "# Run unchanged with:  liggghts -in " << kLiggghtsScript << "   (or: mpirun -np N liggghts -in "
+    << kLiggghtsScript << ")\n"
+    << "# Reads " << kLiggghtsData << "; writes " << kLiggghtsLog << ", " << kLiggghtsFinalDump << ", "
+    << kLiggghtsContactsDump << ".\n#\n"
+    << "# Time step " << g6(plan.timestep) << " s: " << plan.timestep_rule << "\n#\n"
+    << "# Stop rule: every " << sched.steps_per_check << " steps (" << g6(sched.steps_per_check * plan.timestep)
+    << " s) the total kinetic energy E (translational +\n"
+    << "# rotational) is compared with the threshold " << g6(plan.kinetic_threshold)
+    << " J = stop_kinetic_ratio * sum m g d. The run stops when E and its mean\n"
+    << "# over the last " << sched.steps_per_check << " steps are both below it, once armed (the mean was above "
+    << "the threshold once, or t >= " << g6(sched.arming_time) << " s =\n"
+    << "# sqrt(2 r_min / g)); otherwise at max_time " << g6(plan.max_time) << " s (" << sched.max_checks
+    << " checks). E above " << g6(sched.blowup_bound) << " J (twice the gravitational and\n"
+    << "# elastic energy the packing holds) ends the run as a failure (BTR-FAILURE).\n";
+  if (dim == 2)
+    s << "#\n# 2D packing: the disks are relaxed as spheres of the same radii whose centres stay in y = 0\n"
+      << "# (fix btr_plane zeroes the y force; contact normals and torques then stay in the x-z plane).\n";
+  s << "\n"
+    << "atom_style      granular\n"
+    << "atom_modify     map array\n"
+    << "boundary        " << box.boundary << "\n"
+    << "newton          off\n"
+    << "communicate     single vel yes\n"
+    << "units           si\n"
+    // A settled bed split along z puts nearly every grain on one rank: split only laterally.
+    << "processors      " << (dim == 2 ? "* 1 1" : "* * 1") << "\n"
+    << "read_data       " << kLiggghtsData << "\n"
+    << "neighbor        " << g17(0.5 * r_min) << " bin\n"
+    << "neigh_modify    delay 0\n";
+  // LIGGGHTS refuses Young's moduli outside [5e6, 1e9] Pa in SI units unless told otherwise.
+  if (y_min < 5e6) s << "soft_particles  yes\n";
+  if (y_max > 1e9) s << "hard_particles  yes\n";
+
+  s << "\n# Materials: types 1.." << n_types - 1 << " = species";
+  for (const Component& c : scene.grains.components) s << " " << c.species;
+  s << " (in this order), type " << types.wall_type << " = walls (material of species "
+    << scene.grains.components.front().species << ").\n"
+    << "# Unlike species: mean restitution and friction; grain-wall: the grain's values.\n";
+  s << "fix btr_young all property/global youngsModulus peratomtype"
+    << per_type(types, [](const Material& m) { return m.young; }) << "\n";
+  s << "fix btr_poisson all property/global poissonsRatio peratomtype"
+    << per_type(types, [](const Material& m) { return m.poisson; }) << "\n";
+  s << "fix btr_restitution all property/global coefficientRestitution peratomtypepair"
+    << per_type_pair(types, [](const Material& m) { return m.restitution; }) << "\n";
+  s << "fix btr_friction all property/global coefficientFriction peratomtypepair"
+    << per_type_pair(types, [](const Material& m) { return m.friction; }) << "\n";
+  if (rolling)
+    s << "fix btr_rolling all property/global coefficientRollingFriction peratomtypepair"
+      << per_type_pair(types, [](const Material& m) { return m.rolling_friction; }) << "\n";
+  if (hooke)
+    s << "fix btr_vchar all property/global characteristicVelocity scalar "
+      << g17(hooke_characteristic_velocity(grains)) << "   # sqrt(2 g d_max)\n";
+
+  s << "\npair_style      gran " << models << "\n"
+    << "pair_coeff      * *\n"
+    << "timestep        " << g17(plan.timestep) << "\n\n";
+
+  s << "# Walls: exactly the container's.\n";
+  for (const DemWall& w : walls)
+    s << "fix " << liggghts_wall_id(w.name) << " all wall/gran " << models << " primitive type " << types.wall_type
+      << " " << wall_geometry(w) << " store_force yes\n";
+  s << "fix btr_gravity all gravity " << g17(kGravity) << " vector 0.0 0.0 -1.0\n";
+  if (dim == 2) s << "fix btr_plane all setforce NULL 0.0 NULL   # after the walls and gravity\n";
+  s << "fix btr_integrate all nve/sphere\n\n";
+
+  s << "compute btr_ke all ke\n"
+    << "compute btr_rot all erotate/sphere\n"
+    << "compute btr_pairs all pair/gran/local id force_normal delta\n"
+    << "variable btr_ekin equal c_btr_ke+c_btr_rot\n"
+    << "fix btr_kmean all ave/time " << sched.average_every << " " << kAveragedSamples << " "
+    << sched.steps_per_check << " v_btr_ekin\n"
+    << "variable btr_kmean equal f_btr_kmean\n"
+    << "variable btr_time equal time\n"
+    << "thermo_style    custom step time v_btr_ekin f_btr_kmean\n"
+    << "thermo_modify   norm no lost error format float %.17g\n"
+    << "thermo          " << sched.steps_per_check << "\n\n";
+
+  s << "variable btr_threshold equal " << g17(plan.kinetic_threshold) << "\n"
+    << "variable btr_bound equal " << g17(sched.blowup_bound) << "\n"
+    << "variable btr_tarm equal " << g17(sched.arming_time) << "\n"
+    << "variable btr_armed equal 0\n"
+    << "print \"BTR time step " << g17(plan.timestep) << " s: " << plan.timestep_rule << "\"\n\n"
+    << "label btr_loop\n"
+    << "variable btr_check loop " << sched.max_checks << "\n"
+    << "run " << sched.steps_per_check << " pre no post no\n"
+    << "if \"${btr_ekin} > ${btr_bound}\" then &\n"
+    << "  \"print 'BTR-FAILURE kinetic energy ${btr_ekin} J above the bound ${btr_bound} J at t = ${btr_time} s'\" "
+       "quit\n"
+    << "if \"${btr_kmean} >= ${btr_threshold}\" then \"variable btr_armed equal 1\"\n"
+    << "if \"(${btr_armed} > 0 || ${btr_time} >= ${btr_tarm}) && ${btr_kmean} < ${btr_threshold} && "
+       "${btr_ekin} < ${btr_threshold}\" then \"jump SELF btr_converged\"\n"
+    << "next btr_check\n"
+    << "jump SELF btr_loop\n"
+    << "print \"BTR-STOP max-time t = ${btr_time} s\"\n"
+    << "jump SELF btr_output\n"
+    << "label btr_converged\n"
+    << "print \"BTR-STOP kinetic-energy t = ${btr_time} s\"\n"
+    << "label btr_output\n\n";
+
+  std::vector<std::string> cols{"id", "x", "y", "z", "vx", "vy", "vz"};
+  for (const DemWall& w : walls)
+    for (const std::string& c : wall_force_columns(w)) cols.push_back(c);
+  std::string names, format = "%d";
+  for (const std::string& c : cols) names += " " + c;
+  for (std::size_t i = 1; i < cols.size(); ++i) format += " %.17g";
+  s << "write_dump all custom " << kLiggghtsFinalDump << names << " modify sort id format \"" << format << "\"\n"
+    << "write_dump all local " << kLiggghtsContactsDump
+    << " c_btr_pairs[1] c_btr_pairs[2] c_btr_pairs[3] c_btr_pairs[4] c_btr_pairs[5] c_btr_pairs[6] c_btr_pairs[7]"
+    << " modify format \"%.0f %.0f %.0f %.17g %.17g %.17g %.17g\"\n";
+
+  namespace fs = std::filesystem;
+  const std::string data_path = (fs::path(dir) / kLiggghtsData).string();
+  const std::string script_path = (fs::path(dir) / kLiggghtsScript).string();
+  write_text_file(data_path, data_file(packing, scene, box, n_types));
+  write_text_file(script_path, s.str());
+  return {script_path, data_path};
+}
+
+}  // namespace btr

@@ -1,0 +1,43 @@
+#pragma once
+// The LIGGGHTS inputs of a relaxation: a read_data file (atom_style granular) and an input script.
+//
+// Choices (see coupling/README.md):
+//  - atom types 1..K are the scene's components in order, type K+1 is the walls' material;
+//  - walls are primitive fix wall/gran planes / a z-cylinder, exactly the container's (dem_walls.h);
+//    periodic containers use periodic boundaries instead of side walls;
+//  - 2D packings (disks in the x-z plane) run as spheres held in y = 0 by "fix setforce NULL 0 NULL";
+//  - the stop rule is a loop of short runs (label / run / if ... jump SELF / next / jump), see
+//    write_liggghts_script; it prints "BTR-STOP kinetic-energy" or "BTR-STOP max-time";
+//  - the final state goes to btr_final.dump (id x y z vx vy vz and the normal force of each wall)
+//    and btr_contacts.dump (pair ids, periodic flag, normal force vector, overlap), full precision.
+#include <string>
+#include <vector>
+
+#include "coupling/engine_adapter.h"
+
+namespace btr {
+
+inline constexpr const char* kLiggghtsScript = "in.btr";
+inline constexpr const char* kLiggghtsData = "btr.data";
+inline constexpr const char* kLiggghtsLog = "log.liggghts";  // also LIGGGHTS' default log name
+inline constexpr const char* kLiggghtsFinalDump = "btr_final.dump";
+inline constexpr const char* kLiggghtsContactsDump = "btr_contacts.dump";
+
+// The LIGGGHTS fix ID of a wall ("floor" -> "btr_wall_floor", "x-" -> "btr_wall_xlo", ...).
+std::string liggghts_wall_id(const std::string& wall_name);
+
+// How the script samples and stops, derived from the plan (exposed for the tests).
+struct LiggghtsSchedule {
+  long steps_per_check = 0;   // thermo interval = stop-rule check interval = averaging window
+  long average_every = 0;     // fix ave/time Nevery (Nrepeat = steps_per_check / average_every)
+  long max_checks = 0;        // checks until max_time
+  double arming_time = 0.0;   // s
+  double blowup_bound = 0.0;  // J
+};
+LiggghtsSchedule liggghts_schedule(const Grains& grains, const Scene& scene, const RelaxPlan& plan);
+
+// Writes dir/btr.data and dir/in.btr; returns their paths.
+std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Scene& scene, const RelaxPlan& plan,
+                                               const std::string& dir);
+
+}  // namespace btr

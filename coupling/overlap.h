@@ -1,0 +1,32 @@
+#pragma once
+// Overlaps in a packing: grain pairs (nearest periodic image in a periodic container) and grains
+// against the container's walls (dem_walls.h). BTR contacts touch exactly, so any overlap beyond
+// round-off comes from elsewhere (an edited packing, a relaxation) and is measured here.
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include "btr/container.h"
+#include "btr/grain.h"
+#include "coupling/dem_walls.h"
+
+namespace btr {
+
+struct OverlapReport {
+  double largest = 0.0;        // largest overlap / smaller radius of the pair (grain radius for a wall)
+  double depth = 0.0;          // that overlap [m]
+  std::int64_t id_a = 0;       // grains of the largest overlap; id_b == 0 means a wall
+  std::int64_t id_b = 0;
+  std::string wall;            // the wall's name when id_b == 0
+  std::int64_t count = 0;      // contacts with a positive overlap
+  std::string describe() const;  // e.g. "0.031 of the smaller radius (1.5e-05 m) between grains 4 and 17"
+};
+
+// Calls f(id_a, id_b, depth, wall) for every overlapping contact (depth > 0); wall is null for a grain
+// pair, else the wall (then id_b == 0). Each pair is reported once, with id_a < id_b.
+void for_each_overlap(const Grains& grains, int dimension, const Container& container,
+                      const std::function<void(std::int64_t, std::int64_t, double, const DemWall*)>& f);
+
+OverlapReport largest_overlap(const Grains& grains, int dimension, const Container& container);
+
+}  // namespace btr

@@ -1,0 +1,304 @@
+// Packing files: NAME.csv (the interchange format), NAME.json (metadata), NAME.vtp (for ParaView).
+#include "coupling/packing_io.h"
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <stdexcept>
+#include <string_view>
+
+#include <vtkCellArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkIntArray.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkIdTypeArray.h>
+#include <vtkTypeInt64Array.h>
+#include <vtkXMLPolyDataWriter.h>
+
+namespace btr {
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kHeader = "id,x,y,z,radius,species";
+constexpr const char* kColumns[] = {"id", "x", "y", "z", "radius", "species"};
+
+[[noreturn]] void csv_error(const std::string& file, std::int64_t line, const std::string& what) {
+  throw std::runtime_error(file + ":" + std::to_string(line) + ": " + what);
+}
+
+std::string excerpt(std::string_view s) {
+  constexpr std::size_t kMax = 40;
+  std::string out(s.substr(0, kMax));
+  if (s.size() > kMax) out += "...";
+  return "'" + out + "'";
+}
+
+double parse_double(std::string_view field, const std::string& file, std::int64_t line, int col) {
+  std::string text(field);
+  const char* begin = text.c_str();
+  char* end = nullptr;
+  errno = 0;
+  double v = std::strtod(begin, &end);
+  if (text.empty() || end != begin + text.size() || errno == ERANGE || !std::isfinite(v))
+    csv_error(file, line, std::string("column '") + kColumns[col] + "': expected a finite number, got " +
+                              excerpt(field));
+  return v;
+}
+
+std::int64_t parse_int(std::string_view field, const std::string& file, std::int64_t line, int col) {
+  std::string text(field);
+  const char* begin = text.c_str();
+  char* end = nullptr;
+  errno = 0;
+  long long v = std::strtoll(begin, &end, 10);
+  if (text.empty() || end != begin + text.size() || errno == ERANGE)
+    csv_error(file, line, std::string("column '") + kColumns[col] + "': expected an integer, got " +
+                              excerpt(field));
+  return v;
+}
+
+Grains read_csv(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path + ": cannot open packing file: " + std::strerror(errno));
+  Grains grains;
+  std::string text;
+  std::int64_t line_no = 0;
+  std::int64_t blank_line = 0;  // first blank line seen; only trailing blank lines are allowed
+  while (std::getline(in, text)) {
+    ++line_no;
+    if (!text.empty() && text.back() == '\r') text.pop_back();
+    if (line_no == 1) {
+      if (text != kHeader)
+        csv_error(path, 1, std::string("expected the header '") + kHeader + "', got " + excerpt(text));
+      continue;
+    }
+    if (text.empty()) {
+      if (blank_line == 0) blank_line = line_no;
+      continue;
+    }
+    if (blank_line != 0) csv_error(path, blank_line, "blank line inside the data");
+
+    std::string_view fields[6];
+    std::string_view rest(text);
+    int n = 0;
+    while (true) {
+      std::size_t comma = rest.find(',');
+      if (n == 6) csv_error(path, line_no, "expected 6 columns (" + std::string(kHeader) + "), got more");
+      fields[n++] = rest.substr(0, comma);
+      if (comma == std::string_view::npos) break;
+      rest.remove_prefix(comma + 1);
+    }
+    if (n != 6)
+      csv_error(path, line_no, "expected 6 columns (" + std::string(kHeader) + "), got " + std::to_string(n));
+
+    const std::int64_t expected_id = static_cast<std::int64_t>(grains.size()) + 1;
+    std::int64_t id = parse_int(fields[0], path, line_no, 0);
+    if (id != expected_id)
+      csv_error(path, line_no, "column 'id': expected " + std::to_string(expected_id) +
+                                   " (ids are 1..N in order), got " + std::to_string(id));
+    Grain g;
+    g.x = Vec3(parse_double(fields[1], path, line_no, 1), parse_double(fields[2], path, line_no, 2),
+               parse_double(fields[3], path, line_no, 3));
+    g.r = parse_double(fields[4], path, line_no, 4);
+    if (!(g.r > 0.0))
+      csv_error(path, line_no, "column 'radius': expected a positive number, got " + excerpt(fields[4]));
+    std::int64_t species = parse_int(fields[5], path, line_no, 5);
+    if (species < 1 || species > 1000000)
+      csv_error(path, line_no, "column 'species': expected an integer >= 1, got " + excerpt(fields[5]));
+    g.species = static_cast<int>(species);
+    grains.push_back(g);
+  }
+  if (in.bad()) throw std::runtime_error(path + ": read error: " + std::strerror(errno));
+  if (line_no == 0) csv_error(path, 1, std::string("expected the header '") + kHeader + "', the file is empty");
+  return grains;
+}
+
+// A file being written under a temporary name in its final folder; removed unless committed.
+class TempFile {
+ public:
+  explicit TempFile(const fs::path& final_path)
+      : final_(final_path),
+        temp_(final_path.parent_path() /
+              (final_path.filename().string() + ".tmp." + std::to_string(::getpid()))) {}
+  ~TempFile() {
+    if (!committed_) {
+      std::error_code ec;
+      fs::remove(temp_, ec);
+    }
+  }
+  TempFile(const TempFile&) = delete;
+  TempFile& operator=(const TempFile&) = delete;
+  const fs::path& temp() const { return temp_; }
+  const fs::path& final_path() const { return final_; }
+  void commit() {
+    if (std::rename(temp_.c_str(), final_.c_str()) != 0)
+      throw std::runtime_error(final_.string() + ": cannot rename " + temp_.string() + " to it: " +
+                               std::strerror(errno));
+    committed_ = true;
+  }
+
+ private:
+  fs::path final_, temp_;
+  bool committed_ = false;
+};
+
+struct FileCloser {
+  void operator()(std::FILE* f) const { std::fclose(f); }
+};
+
+void write_csv(const TempFile& file, const Grains& grains) {
+  const std::string name = file.final_path().string();
+  std::unique_ptr<std::FILE, FileCloser> f(std::fopen(file.temp().c_str(), "wb"));
+  if (!f) throw std::runtime_error(name + ": cannot create " + file.temp().string() + ": " + std::strerror(errno));
+  std::string buffer = std::string(kHeader) + "\n";
+  char row[256];
+  for (std::size_t i = 0; i < grains.size(); ++i) {
+    const Grain& g = grains[i];
+    int n = std::snprintf(row, sizeof row, "%zu,%.17g,%.17g,%.17g,%.17g,%d\n", i + 1, g.x.x(), g.x.y(),
+                          g.x.z(), g.r, g.species);
+    buffer.append(row, static_cast<std::size_t>(n));
+    if (buffer.size() > (1u << 20)) {
+      if (std::fwrite(buffer.data(), 1, buffer.size(), f.get()) != buffer.size())
+        throw std::runtime_error(name + ": write error: " + std::strerror(errno));
+      buffer.clear();
+    }
+  }
+  if (std::fwrite(buffer.data(), 1, buffer.size(), f.get()) != buffer.size())
+    throw std::runtime_error(name + ": write error: " + std::strerror(errno));
+  if (std::fclose(f.release()) != 0) throw std::runtime_error(name + ": write error: " + std::strerror(errno));
+}
+
+void write_json(const TempFile& file, const nlohmann::json& meta) {
+  const std::string name = file.final_path().string();
+  std::ofstream out(file.temp(), std::ios::binary);
+  if (!out) throw std::runtime_error(name + ": cannot create " + file.temp().string() + ": " + std::strerror(errno));
+  out << (meta.is_null() ? nlohmann::json::object() : meta).dump(2) << '\n';
+  out.close();
+  if (!out) throw std::runtime_error(name + ": write error");
+}
+
+void write_vtp(const TempFile& file, const Grains& grains, const std::vector<PointData>& extra) {
+  const vtkIdType n = static_cast<vtkIdType>(grains.size());
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(n);
+  vtkNew<vtkDoubleArray> radius;
+  radius->SetName("radius");
+  radius->SetNumberOfValues(n);
+  vtkNew<vtkTypeInt64Array> id;
+  id->SetName("id");
+  id->SetNumberOfValues(n);
+  vtkNew<vtkIntArray> species;
+  species->SetName("species");
+  species->SetNumberOfValues(n);
+  vtkNew<vtkIdTypeArray> offsets, connectivity;
+  offsets->SetNumberOfValues(n + 1);
+  connectivity->SetNumberOfValues(n);
+  for (vtkIdType i = 0; i < n; ++i) {
+    const Grain& g = grains[static_cast<std::size_t>(i)];
+    points->SetPoint(i, g.x.x(), g.x.y(), g.x.z());
+    radius->SetValue(i, g.r);
+    id->SetValue(i, i + 1);
+    species->SetValue(i, g.species);
+    offsets->SetValue(i, i);
+    connectivity->SetValue(i, i);
+  }
+  offsets->SetValue(n, n);
+  vtkNew<vtkCellArray> verts;  // one vertex cell per grain, so ParaView draws the points as they are
+  verts->SetData(offsets, connectivity);
+
+  vtkNew<vtkPolyData> poly;
+  poly->SetPoints(points);
+  poly->SetVerts(verts);
+  poly->GetPointData()->AddArray(radius);
+  poly->GetPointData()->AddArray(id);
+  poly->GetPointData()->AddArray(species);
+  poly->GetPointData()->SetActiveScalars("radius");
+  for (const PointData& pd : extra) {
+    vtkNew<vtkDoubleArray> a;
+    a->SetName(pd.name.c_str());
+    a->SetNumberOfValues(n);
+    for (vtkIdType i = 0; i < n; ++i) a->SetValue(i, pd.values[static_cast<std::size_t>(i)]);
+    poly->GetPointData()->AddArray(a);
+  }
+
+  vtkNew<vtkXMLPolyDataWriter> writer;
+  writer->SetFileName(file.temp().c_str());
+  writer->SetInputData(poly);
+  writer->SetDataModeToAppended();
+  writer->EncodeAppendedDataOff();  // raw binary
+  writer->SetCompressorTypeToLZ4();
+  writer->SetHeaderTypeToUInt64();
+  if (writer->Write() != 1 || writer->GetErrorCode() != 0)
+    throw std::runtime_error(file.final_path().string() + ": VTK could not write " + file.temp().string());
+}
+
+}  // namespace
+
+Packing read_packing(const std::string& csv_path) {
+  Packing packing;
+  packing.grains = read_csv(csv_path);
+  fs::path json_path = fs::path(csv_path).replace_extension(".json");
+  packing.meta = nlohmann::json::object();
+  if (fs::exists(json_path)) {
+    std::ifstream in(json_path, std::ios::binary);
+    if (!in) throw std::runtime_error(json_path.string() + ": cannot open: " + std::strerror(errno));
+    try {
+      packing.meta = nlohmann::json::parse(in);
+    } catch (const nlohmann::json::parse_error& e) {
+      throw std::runtime_error(json_path.string() + ": not valid JSON: " + e.what());
+    }
+    if (!packing.meta.is_object())
+      throw std::runtime_error(json_path.string() + ": expected a JSON object at the top level");
+  }
+  return packing;
+}
+
+void write_packing(const std::string& dir, const std::string& name, const Packing& packing,
+                   const std::vector<PointData>& extra) {
+  if (name.empty() || name.find('/') != std::string::npos)
+    throw std::runtime_error("packing name '" + name + "': expected a file name without '/'");
+  for (const PointData& pd : extra) {
+    if (pd.values.size() != packing.grains.size())
+      throw std::runtime_error("point data '" + pd.name + "': expected " + std::to_string(packing.grains.size()) +
+                               " values (one per grain), got " + std::to_string(pd.values.size()));
+    if (pd.name.empty() || pd.name == "radius" || pd.name == "id" || pd.name == "species")
+      throw std::runtime_error("point data '" + pd.name + "': expected a non-empty name other than radius, id, species");
+  }
+  std::error_code ec;
+  fs::create_directories(dir.empty() ? fs::path(".") : fs::path(dir), ec);
+  if (ec) throw std::runtime_error(dir + ": cannot create the output folder: " + ec.message());
+
+  const fs::path base = (dir.empty() ? fs::path(".") : fs::path(dir)) / name;
+  // All three are written under temporary names first and renamed only once all succeeded, so a
+  // failure leaves the previous packing of that name untouched.
+  TempFile csv(fs::path(base.string() + ".csv"));
+  TempFile vtp(fs::path(base.string() + ".vtp"));
+  TempFile json(fs::path(base.string() + ".json"));
+  write_csv(csv, packing.grains);
+  write_vtp(vtp, packing.grains, extra);
+  write_json(json, packing.meta);
+  csv.commit();
+  vtp.commit();
+  json.commit();
+}
+
+void write_packing_meta(const std::string& dir, const std::string& name, const nlohmann::json& meta) {
+  const fs::path base = (dir.empty() ? fs::path(".") : fs::path(dir)) / name;
+  TempFile json(fs::path(base.string() + ".json"));
+  write_json(json, meta);
+  json.commit();
+}
+
+}  // namespace btr

@@ -1,0 +1,33 @@
+#pragma once
+// The packing interchange format (DESIGN.md section 2): NAME.csv + NAME.json + NAME.vtp.
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "btr/grain.h"
+
+namespace btr {
+
+struct Packing {
+  Grains grains;        // grain i has id i + 1
+  nlohmann::json meta;  // the content of NAME.json (scene, seed, dimension, container, counts, timings...)
+};
+
+// A per-grain value written as VTK point data (e.g. displacement), one value per grain.
+struct PointData {
+  std::string name;
+  std::vector<double> values;
+};
+
+// Reads PATH (NAME.csv) and, if present, NAME.json beside it. Ids must be 1..N in order.
+// Throws std::runtime_error naming the file, the line and what was expected.
+Packing read_packing(const std::string& csv_path);
+
+// Writes DIR/NAME.csv, DIR/NAME.json and DIR/NAME.vtp, each to a temporary name then renamed.
+void write_packing(const std::string& dir, const std::string& name, const Packing& packing,
+                   const std::vector<PointData>& extra = {});
+
+// Rewrites only DIR/NAME.json (temporary name, then renamed), e.g. to add the time spent writing.
+void write_packing_meta(const std::string& dir, const std::string& name, const nlohmann::json& meta);
+
+}  // namespace btr

@@ -1,0 +1,270 @@
+// DEM relaxation, engine-independent part: plan (time step, overlap, stop threshold), inputs, run,
+// checks of the result, output files. The engines live behind EngineAdapter.
+#include "coupling/relax.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <limits>
+
+#include "coupling/dem_walls.h"
+#include "coupling/engine_adapter.h"
+#include "coupling/materials.h"
+#include "coupling/overlap.h"
+#include "coupling/process.h"
+#include "coupling/relax_plan.h"
+#include "coupling/text_file.h"
+#include "coupling/timestep.h"
+
+namespace btr {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr int kLogTailLines = 25;
+constexpr const char* kConsoleFile = "console.log";  // the engine's stdout and stderr
+
+std::string g6(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+void check_inputs(const Packing& packing, const Scene& scene) {
+  if (packing.grains.empty()) throw RelaxRefused("the packing has no grains");
+  if (scene.dimension != 2 && scene.dimension != 3)
+    throw RelaxRefused("scene dimension must be 2 or 3, got " + std::to_string(scene.dimension));
+  const RelaxSpec& r = scene.relax;
+  if (!(r.max_time > 0.0)) throw RelaxRefused("relax.max_time must be positive, got " + g6(r.max_time));
+  if (!(r.stop_kinetic_ratio > 0.0))
+    throw RelaxRefused("relax.stop_kinetic_ratio must be positive, got " + g6(r.stop_kinetic_ratio));
+  if (!(r.timestep_fraction > 0.0 && r.timestep_fraction <= 1.0))
+    throw RelaxRefused("relax.timestep_fraction must be in (0, 1], got " + g6(r.timestep_fraction));
+  try {
+    dem_walls(scene.container, scene.dimension);
+    for (const Grain& g : packing.grains) component_index(scene, g.species);
+  } catch (const std::runtime_error& e) {
+    throw RelaxRefused(e.what());
+  }
+  if (scene.dimension == 2)
+    for (std::size_t i = 0; i < packing.grains.size(); ++i)
+      if (packing.grains[i].x.y() != 0.0)
+        throw RelaxRefused("2D packing: grain " + std::to_string(i + 1) + " has y = " + g6(packing.grains[i].x.y()) +
+                           " (2D grains lie in the plane y = 0)");
+}
+
+double periodic_wrap(double x, double period) { return x - period * std::floor(x / period + 0.5); }
+
+}  // namespace
+
+std::unique_ptr<EngineAdapter> make_adapter(const std::string& engine) {
+  if (engine == "liggghts") return make_liggghts_adapter();
+  if (engine == "yade") return make_yade_adapter();
+  throw RelaxRefused("engine: expected \"liggghts\" or \"yade\", got \"" + engine + "\"");
+}
+
+double kinetic_threshold(const Grains& grains, const Scene& scene) {
+  const std::vector<double> m = grain_masses(grains, scene);
+  double sum = 0.0;
+  for (std::size_t i = 0; i < grains.size(); ++i) sum += m[i] * kGravity * 2.0 * grains[i].r;
+  return scene.relax.stop_kinetic_ratio * sum;
+}
+
+double stop_arming_time(const Grains& grains) {
+  double r_min = std::numeric_limits<double>::infinity();
+  for (const Grain& g : grains) r_min = std::min(r_min, g.r);
+  return std::sqrt(2.0 * r_min / kGravity);
+}
+
+double kinetic_energy_bound(const Grains& grains, const Scene& scene) {
+  const std::vector<double> m = grain_masses(grains, scene);
+  double energy = 0.0;
+  for (std::size_t i = 0; i < grains.size(); ++i) energy += m[i] * kGravity * std::max(grains[i].x.z(), 0.0);
+  const bool hooke = scene.relax.model == "hooke";
+  const double v = hooke_characteristic_velocity(grains);
+  const Material& wall = wall_material(scene);
+  auto material = [&](std::int64_t id) -> const Material& {
+    return scene.grains.components[component_index(scene, grains[id - 1].species)].material;
+  };
+  for_each_overlap(grains, scene.dimension, scene.container,
+                   [&](std::int64_t a, std::int64_t b, double depth, const DemWall*) {
+                     const double ra = grains[a - 1].r, ma = m[a - 1];
+                     const double r_eff = b == 0 ? ra : ra * grains[b - 1].r / (ra + grains[b - 1].r);
+                     const double m_eff = b == 0 ? ma : ma * m[b - 1] / (ma + m[b - 1]);
+                     const double y_eff = effective_young(material(a), b == 0 ? wall : material(b));
+                     if (hooke)
+                       energy += 0.5 * hooke_stiffness(r_eff, m_eff, y_eff, v) * depth * depth;
+                     else
+                       energy += 8.0 / 15.0 * y_eff * std::sqrt(r_eff) * std::pow(depth, 2.5);
+                   });
+  return 2.0 * energy;
+}
+
+RelaxPlan make_plan(const Packing& packing, const Scene& scene, const RelaxSettings& settings) {
+  check_inputs(packing, scene);
+  RelaxPlan plan;
+  const StableStep stable = stable_timestep(packing.grains, scene);
+  const std::optional<double> requested = settings.timestep ? settings.timestep : scene.relax.timestep;
+  if (requested) {
+    if (!(*requested > 0.0)) throw RelaxRefused("requested time step must be positive, got " + g6(*requested));
+    if (*requested > stable.step)
+      throw RelaxRefused("requested time step " + g6(*requested) + " s is above the stable step " + g6(stable.step) +
+                         " s; use at most " + g6(stable.step) + " s (" + stable.rule + ")");
+    plan.timestep = *requested;
+    plan.timestep_rule = "requested " + g6(*requested) + " s (stable: " + stable.rule + ")";
+  } else {
+    plan.timestep = stable.step;
+    plan.timestep_rule = stable.rule;
+  }
+  if (!(settings.max_overlap >= 0.0)) throw RelaxRefused("max_overlap must be >= 0, got " + g6(settings.max_overlap));
+  const OverlapReport overlap = largest_overlap(packing.grains, scene.dimension, scene.container);
+  if (overlap.largest > settings.max_overlap)
+    throw RelaxRefused("packing refused: largest initial overlap " + overlap.describe() + " exceeds the limit " +
+                       g6(settings.max_overlap) + " of the smaller radius");
+  plan.largest_overlap = overlap.largest;
+  plan.max_time = scene.relax.max_time;
+  plan.kinetic_threshold = kinetic_threshold(packing.grains, scene);
+  return plan;
+}
+
+std::vector<std::string> write_engine_inputs(const Packing& packing, const Scene& scene, const EngineAdapter& adapter,
+                                             const RelaxSettings& settings, const RelaxPlan& plan,
+                                             const std::string& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw std::runtime_error(dir + ": cannot create the output folder: " + ec.message());
+  std::cout << "time step " << g6(plan.timestep) << " s: " << plan.timestep_rule << "\n"
+            << "largest initial overlap: " << g6(plan.largest_overlap) << " of the smaller radius\n";
+  return adapter.write_inputs(packing, scene, settings, plan, dir);
+}
+
+RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const EngineAdapter& adapter,
+                              const std::string& engine, const RelaxSettings& settings, const RelaxPlan& plan,
+                              const std::string& dir) {
+  const std::string log = adapter.log_file(dir);
+  const std::string console = (fs::path(dir) / kConsoleFile).string();
+  std::error_code ec;
+  fs::remove(log, ec);  // a stale log must not pass for this run's
+  fs::remove(console, ec);
+
+  auto failure = [&](const std::string& why) -> EngineFailure {
+    std::string msg = engine + " relaxation failed in " + dir + ": " + why;
+    const std::string log_tail = tail_lines(log, kLogTailLines);
+    msg += "\n--- last lines of " + log + " ---\n" + (log_tail.empty() ? "(no log)\n" : log_tail);
+    const std::string console_tail = tail_lines(console, 10);
+    if (!console_tail.empty()) msg += "--- last lines of " + console + " ---\n" + console_tail;
+    return EngineFailure(msg);
+  };
+
+  const EngineCommand cmd = adapter.command(dir, settings);
+  const ProcessOutcome outcome = run_process(cmd, dir, settings.wall_time_limit, console);
+  if (!outcome.ok()) throw failure(outcome.describe());
+
+  RelaxResult res;
+  try {
+    res = adapter.read_back(dir, packing, scene, plan);
+  } catch (const EngineFailure& e) {
+    throw failure(e.what());
+  }
+  res.wall_seconds = outcome.wall_seconds;
+
+  // Checks every engine's result gets.
+  const Grains& in = packing.grains;
+  Grains& out = res.relaxed.grains;
+  if (out.size() != in.size())
+    throw failure("lost grains: " + std::to_string(out.size()) + " of " + std::to_string(in.size()) + " came back");
+  const Container& c = scene.container;
+  const std::vector<DemWall> walls = dem_walls(c, scene.dimension);
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    Grain& g = out[i];
+    const std::string who = "grain " + std::to_string(i + 1);
+    if (!g.x.allFinite()) throw failure(who + " has a non-finite position");
+    if (g.r != in[i].r || g.species != in[i].species) throw failure(who + " came back with another radius or species");
+    if (scene.dimension == 2 && std::abs(g.x.y()) > 1e-9 * g.r)
+      throw failure(who + " left the plane y = 0 (y = " + g6(g.x.y()) + " m)");
+    if (c.kind == ContainerKind::Periodic) {
+      g.x.x() = periodic_wrap(g.x.x(), c.size_x);
+      if (scene.dimension == 3) g.x.y() = periodic_wrap(g.x.y(), c.size_y);
+    }
+    for (const DemWall& w : walls)
+      if (w.distance(g.x) < 0.0)
+        throw failure(who + " is outside the container: its centre is beyond the " + w.name + " wall by " +
+                      g6(-w.distance(g.x)) + " m");
+  }
+  const double bound = kinetic_energy_bound(in, scene);
+  for (const auto& [t, e] : res.kinetic_history)
+    if (!std::isfinite(e) || e > bound)
+      throw failure("kinetic energy grew to " + g6(e) + " J at t = " + g6(t) + " s, above the bound " + g6(bound) +
+                    " J (twice the energy the packing holds): the run blew up");
+  if (res.stop_reason.empty()) throw failure("the engine did not say why it stopped");
+
+  // Outputs.
+  std::sort(res.contacts.begin(), res.contacts.end(), [](const RelaxResult::Contact& a, const RelaxResult::Contact& b) {
+    return a.i != b.i ? a.i < b.i : a.j < b.j;
+  });
+  PointData displacement{"displacement", std::vector<double>(in.size())};
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    Vec3 d = out[i].x - in[i].x;
+    if (c.kind == ContainerKind::Periodic) {
+      d.x() = periodic_wrap(d.x(), c.size_x);
+      if (scene.dimension == 3) d.y() = periodic_wrap(d.y(), c.size_y);
+    }
+    displacement.values[i] = d.norm();
+  }
+  const OverlapReport final_overlap = largest_overlap(out, scene.dimension, c);
+  nlohmann::json meta = packing.meta.is_object() ? packing.meta : nlohmann::json::object();
+  meta["relax"] = {
+      {"engine", engine},
+      {"model", scene.relax.model},
+      {"np", settings.np},
+      {"timestep", plan.timestep},
+      {"timestep_rule", plan.timestep_rule},
+      {"max_time", plan.max_time},
+      {"kinetic_threshold", plan.kinetic_threshold},
+      {"stop_reason", res.stop_reason},
+      {"simulated_time", res.simulated_time},
+      {"wall_seconds", res.wall_seconds},
+      {"final_kinetic_energy", res.kinetic_history.empty() ? 0.0 : res.kinetic_history.back().second},
+      {"initial_largest_overlap", plan.largest_overlap},
+      {"final_largest_overlap", final_overlap.largest},
+      {"contacts", res.contacts.size()},
+  };
+  res.relaxed.meta = meta;
+  write_packing(dir, "relaxed", res.relaxed, {displacement});
+
+  std::string kin = "time,kinetic_energy\n";
+  char row[128];
+  for (const auto& [t, e] : res.kinetic_history) {
+    std::snprintf(row, sizeof row, "%.17g,%.17g\n", t, e);
+    kin += row;
+  }
+  write_text_file((fs::path(dir) / "kinetic.csv").string(), kin);
+  std::string con = "id1,id2,normal_force\n";  // id2 = 0: a wall
+  for (const auto& k : res.contacts) {
+    std::snprintf(row, sizeof row, "%lld,%lld,%.17g\n", static_cast<long long>(k.i), static_cast<long long>(k.j),
+                  k.fn);
+    con += row;
+  }
+  write_text_file((fs::path(dir) / "contacts.csv").string(), con);
+  return res;
+}
+
+std::vector<std::string> export_inputs(const Packing& packing, const Scene& scene, const std::string& engine,
+                                       const RelaxSettings& settings, const std::string& dir) {
+  const auto adapter = make_adapter(engine);
+  const RelaxPlan plan = make_plan(packing, scene, settings);
+  return write_engine_inputs(packing, scene, *adapter, settings, plan, dir);
+}
+
+RelaxResult relax(const Packing& packing, const Scene& scene, const std::string& engine,
+                  const RelaxSettings& settings, const std::string& out_dir) {
+  const auto adapter = make_adapter(engine);
+  const RelaxPlan plan = make_plan(packing, scene, settings);
+  write_engine_inputs(packing, scene, *adapter, settings, plan, out_dir);
+  return run_engine_inputs(packing, scene, *adapter, engine, settings, plan, out_dir);
+}
+
+}  // namespace btr

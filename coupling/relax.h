@@ -1,0 +1,47 @@
+#pragma once
+// DEM relaxation of a packing in LIGGGHTS or YADE (DESIGN.md section 4): write the inputs, run the
+// engine, detect failure, read the relaxed packing back.
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "btr/scene.h"
+#include "coupling/packing_io.h"
+
+namespace btr {
+
+struct RelaxSettings {
+  int np = 1;                       // LIGGGHTS: MPI ranks; YADE: threads
+  double wall_time_limit = 3600.0;  // s; the engine is killed past this
+  std::optional<double> timestep;   // overrides the computed stable step (refused if above it)
+  double max_overlap = 0.05;        // refuse packings whose largest overlap / smaller radius exceeds this
+};
+
+// What an engine run produced.
+struct RelaxResult {
+  Packing relaxed;                  // same ids; meta records engine, stop reason, timings
+  std::string stop_reason;          // "kinetic-energy", "unbalanced-force" or "max-time"
+  double simulated_time = 0.0;      // s
+  double wall_seconds = 0.0;
+  std::vector<std::pair<double, double>> kinetic_history;  // (time, kinetic energy)
+  struct Contact { std::int64_t i, j; double fn; };       // j == 0 for a wall
+  std::vector<Contact> contacts;
+};
+
+// An engine that failed (non-zero exit, lost atoms, NaN, blow-up, grains outside the container):
+// the message says why and carries the last lines of the engine's log.
+class EngineFailure : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Write-only: the input files for `engine` ("liggghts" | "yade") into dir; returns their paths.
+std::vector<std::string> export_inputs(const Packing& packing, const Scene& scene, const std::string& engine,
+                                       const RelaxSettings& settings, const std::string& dir);
+
+// Writes the inputs into out_dir, runs the engine there, and reads the result back.
+RelaxResult relax(const Packing& packing, const Scene& scene, const std::string& engine,
+                  const RelaxSettings& settings, const std::string& out_dir);
+
+}  // namespace btr

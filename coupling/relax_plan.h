@@ -1,0 +1,51 @@
+#pragma once
+// The engine-independent steps of a relaxation, in the order relax() runs them; exposed so that a
+// test or a tool can run them one at a time (e.g. export, edit the inputs, then run them).
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "coupling/engine_adapter.h"
+#include "coupling/relax.h"
+
+namespace btr {
+
+// A packing or setting that is refused before any engine starts (overlap, time step, ...).
+class RelaxRefused : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// "liggghts" or "yade"; throws RelaxRefused for anything else.
+std::unique_ptr<EngineAdapter> make_adapter(const std::string& engine);
+
+// Time step (stable step, or the requested one if it is not above it), stop threshold and the
+// largest initial overlap. Throws RelaxRefused for a requested step above the stable one or an
+// overlap above settings.max_overlap, each with the number that would be accepted.
+RelaxPlan make_plan(const Packing& packing, const Scene& scene, const RelaxSettings& settings);
+
+// The stop rule's threshold: ratio * sum_i m_i g d_i (d_i the diameter, m_i a sphere's mass).
+double kinetic_threshold(const Grains& grains, const Scene& scene);
+
+// Simulated time after which a relaxation may stop even if its kinetic energy never rose above the
+// threshold: sqrt(2 r_min / g), the time a grain falling freely from rest takes to move its own
+// radius. (Otherwise a packing at rest at t = 0 would "converge" before it started to move.)
+double stop_arming_time(const Grains& grains);
+
+// An upper bound of the kinetic energy a relaxation can reach without creating energy:
+// 2 (sum_i m_i g z_i + elastic energy of the initial overlaps). Above it the run has blown up.
+double kinetic_energy_bound(const Grains& grains, const Scene& scene);
+
+// Makes dir and writes the engine's inputs into it; prints the time-step rule on stdout.
+std::vector<std::string> write_engine_inputs(const Packing& packing, const Scene& scene, const EngineAdapter& adapter,
+                                             const RelaxSettings& settings, const RelaxPlan& plan,
+                                             const std::string& dir);
+
+// Runs the inputs already in dir, reads the result back, checks it (ids, finite values, grains
+// inside the container, bounded kinetic energy) and writes dir/relaxed.{csv,json,vtp},
+// dir/kinetic.csv and dir/contacts.csv. Throws EngineFailure with the tail of the engine's log.
+RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const EngineAdapter& adapter,
+                              const std::string& engine, const RelaxSettings& settings, const RelaxPlan& plan,
+                              const std::string& dir);
+
+}  // namespace btr

@@ -1,0 +1,141 @@
+#include "coupling/timestep.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <stdexcept>
+
+#include "coupling/materials.h"
+
+namespace btr {
+
+namespace {
+
+std::string fmt(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+// Smallest and largest radius present for each component index.
+struct RadiusRange { double min = std::numeric_limits<double>::infinity(), max = 0.0; };
+
+std::map<int, RadiusRange> radius_ranges(const Grains& grains, const Scene& scene) {
+  std::map<int, RadiusRange> ranges;
+  for (const Grain& g : grains) {
+    RadiusRange& rr = ranges[component_index(scene, g.species)];
+    rr.min = std::min(rr.min, g.r);
+    rr.max = std::max(rr.max, g.r);
+  }
+  return ranges;
+}
+
+}  // namespace
+
+double rayleigh_time(double radius, double density, double young, double poisson) {
+  const double shear = young / (2.0 * (1.0 + poisson));
+  return M_PI * radius * std::sqrt(density / shear) / (0.1631 * poisson + 0.8766);
+}
+
+double hooke_stiffness(double r_eff, double m_eff, double y_eff, double velocity) {
+  const double s = std::sqrt(r_eff);
+  return 16.0 / 15.0 * s * y_eff * std::pow(15.0 * m_eff * velocity * velocity / (16.0 * s * y_eff), 0.2);
+}
+
+double hooke_damping(double m_eff, double stiffness, double restitution) {
+  if (restitution >= 1.0) return 0.0;
+  const double q = M_PI / std::log(restitution);
+  return std::sqrt(4.0 * m_eff * stiffness / (1.0 + q * q));
+}
+
+double hooke_contact_time(double stiffness, double m_eff, double damping) {
+  const double half_rate = damping / (2.0 * m_eff);
+  return M_PI / std::sqrt(stiffness / m_eff - half_rate * half_rate);
+}
+
+double hooke_characteristic_velocity(const Grains& grains) {
+  double r_max = 0.0;
+  for (const Grain& g : grains) r_max = std::max(r_max, g.r);
+  return std::sqrt(2.0 * kGravity * 2.0 * r_max);
+}
+
+StableStep stable_timestep(const Grains& grains, const Scene& scene) {
+  if (grains.empty()) throw std::runtime_error("the packing has no grains: no time step can be derived");
+  const auto& comps = scene.grains.components;
+  const auto ranges = radius_ranges(grains, scene);
+  StableStep s;
+  s.fraction = scene.relax.timestep_fraction;
+
+  if (scene.relax.model == "hertz") {
+    double best = std::numeric_limits<double>::infinity();
+    int best_c = -1;
+    for (const auto& [c, rr] : ranges) {
+      const Material& m = comps[c].material;
+      const double t = rayleigh_time(rr.min, comps[c].density, m.young, m.poisson);
+      if (t < best) { best = t; best_c = c; }
+    }
+    const Component& c = comps[best_c];
+    s.characteristic_time = best;
+    s.step = s.fraction * best;
+    s.rule = "Rayleigh time pi R sqrt(rho/G)/(0.1631 nu + 0.8766) = " + fmt(best) + " s (Hertz; smallest grain R = " +
+             fmt(ranges.at(best_c).min) + " m of species " + std::to_string(c.species) + ", rho = " + fmt(c.density) +
+             " kg/m^3, E = " + fmt(c.material.young) + " Pa, nu = " + fmt(c.material.poisson) + ") x " +
+             fmt(s.fraction) + " = " + fmt(s.step) + " s";
+    return s;
+  }
+  if (scene.relax.model != "hooke")
+    throw std::runtime_error("relax.model: expected \"hertz\" or \"hooke\", got \"" + scene.relax.model + "\"");
+
+  // Hooke: the shortest contact time over the contacts the packing can make. For a pair of species
+  // k/m* is largest at an end of each species' radius range; a wall contact is a partner of infinite
+  // radius and mass.
+  const double v = hooke_characteristic_velocity(grains);
+  const Material& wall = wall_material(scene);
+  double best = std::numeric_limits<double>::infinity();
+  std::string what;
+  auto consider = [&](double r_eff, double m_eff, const Material& a, const Material& b, const std::string& label) {
+    const double k = hooke_stiffness(r_eff, m_eff, effective_young(a, b), v);
+    const double gamma = hooke_damping(m_eff, k, pair_material(a, b).restitution);
+    const double t = hooke_contact_time(k, m_eff, gamma);
+    if (t < best) {
+      best = t;
+      what = label + ": k = " + fmt(k) + " N/m, m_eff = " + fmt(m_eff) + " kg, gamma_n = " + fmt(gamma) + " kg/s";
+    }
+  };
+  for (const auto& [ca, ra] : ranges) {
+    const Component& a = comps[ca];
+    for (double r1 : {ra.min, ra.max}) {
+      const double m1 = grain_mass(r1, a.density);
+      // grain-wall: the grain's restitution (pair_material of the grain with itself keeps it)
+      {
+        const double k = hooke_stiffness(r1, m1, effective_young(a.material, wall), v);
+        const double gamma = hooke_damping(m1, k, a.material.restitution);
+        const double t = hooke_contact_time(k, m1, gamma);
+        if (t < best) {
+          best = t;
+          what = "grain R = " + fmt(r1) + " m of species " + std::to_string(a.species) + " on a wall: k = " + fmt(k) +
+                 " N/m, m_eff = " + fmt(m1) + " kg, gamma_n = " + fmt(gamma) + " kg/s";
+        }
+      }
+      for (const auto& [cb, rb] : ranges) {
+        if (cb < ca) continue;
+        const Component& b = comps[cb];
+        for (double r2 : {rb.min, rb.max}) {
+          const double m2 = grain_mass(r2, b.density);
+          consider(r1 * r2 / (r1 + r2), m1 * m2 / (m1 + m2), a.material, b.material,
+                   "grains R = " + fmt(r1) + " m (species " + std::to_string(a.species) + ") and R = " + fmt(r2) +
+                       " m (species " + std::to_string(b.species) + ")");
+        }
+      }
+    }
+  }
+  s.characteristic_time = best;
+  s.step = s.fraction * best;
+  s.rule = "contact time pi/sqrt(k/m_eff - (gamma/2)^2) = " + fmt(best) + " s (Hooke, V = " + fmt(v) + " m/s; " +
+           what + ") x " + fmt(s.fraction) + " = " + fmt(s.step) + " s";
+  return s;
+}
+
+}  // namespace btr

@@ -1,0 +1,38 @@
+#pragma once
+// Stable time steps for the DEM relaxation (DESIGN.md section 4), shared by both engines.
+//  Hertz: Rayleigh time  T_R = pi R sqrt(rho / G) / (0.1631 nu + 0.8766), G = Y / (2 (1 + nu)),
+//         of the grain that gives the smallest T_R (the smallest grain of its species).
+//  Hooke: contact time   t_c = pi / sqrt(k / m_eff - (gamma / 2)^2), gamma = gamma_n / m_eff, with
+//         k and gamma_n as LIGGGHTS "model hooke" computes them from the materials and the
+//         characteristic impact velocity V, for the stiffest contact the packing can make.
+// The stable step is timestep_fraction times that time.
+#include <string>
+
+#include "btr/grain.h"
+#include "btr/scene.h"
+
+namespace btr {
+
+double rayleigh_time(double radius, double density, double young, double poisson);
+
+// LIGGGHTS "model hooke": k_n = 16/15 sqrt(R*) Y* (15 m* V^2 / (16 sqrt(R*) Y*))^(1/5).
+double hooke_stiffness(double r_eff, double m_eff, double y_eff, double velocity);
+// gamma_n = sqrt(4 m* k_n / (1 + (pi / ln e)^2)) (0 for e = 1).
+double hooke_damping(double m_eff, double stiffness, double restitution);
+// pi / sqrt(k / m* - (gamma_n / (2 m*))^2).
+double hooke_contact_time(double stiffness, double m_eff, double damping);
+// The characteristic impact velocity written for "model hooke": the speed of a grain that fell
+// through the largest diameter of the packing, sqrt(2 g d_max) (the scale of BTR's rearrangements).
+double hooke_characteristic_velocity(const Grains& grains);
+
+struct StableStep {
+  double characteristic_time = 0.0;  // T_R or t_c [s]
+  double fraction = 0.0;             // scene relax.timestep_fraction
+  double step = 0.0;                 // fraction * characteristic_time [s]
+  std::string rule;                  // one line naming the rule, the grain(s) and the numbers
+};
+
+// Throws std::runtime_error for an empty packing or a species the scene does not have.
+StableStep stable_timestep(const Grains& grains, const Scene& scene);
+
+}  // namespace btr

@@ -1,0 +1,339 @@
+// Scene files: every shipped scene loads; bad scenes give an error naming file, line, key and expectation.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "btr/drops.h"
+#include "btr/scene_toml.h"
+
+namespace btr {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A valid 3D scene that each bad-scene test breaks in one place.
+const std::string kBase = R"([scene]
+name = "t"
+dimension = 3
+seed = 1
+
+[grains]
+count = 100
+density = 2500.0
+radius = { distribution = "constant", value = 1e-3 }
+
+[container]
+kind = "box"
+size = [0.02, 0.02]
+
+[source]
+kind = "rain"
+)";
+
+std::string replace(const std::string& text, const std::string& from, const std::string& to) {
+  const auto at = text.find(from);
+  if (at == std::string::npos) throw std::logic_error("test bug: '" + from + "' not in the scene text");
+  return text.substr(0, at) + to + text.substr(at + from.size());
+}
+
+// 1-based line of the first occurrence of `needle`.
+int line_of(const std::string& text, const std::string& needle) {
+  const auto at = text.find(needle);
+  if (at == std::string::npos) throw std::logic_error("test bug: '" + needle + "' not in the scene text");
+  return 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(at), '\n'));
+}
+
+class SceneFile : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("btr_test_scene_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+    path_ = (dir_ / "x.toml").string();
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string write(const std::string& name, const std::string& text) {
+    const std::string path = (dir_ / name).string();
+    std::ofstream(path) << text;
+    return path;
+  }
+  // The message of the SceneError that loading `text` raises ("" if it loads).
+  std::string error_of(const std::string& text, const std::string& name = "x.toml") {
+    path_ = write(name, text);
+    try {
+      load_scene(path_);
+    } catch (const SceneError& e) {
+      return e.what();
+    }
+    return "";
+  }
+  // "FILE:LINE: " of the line holding `needle` in x.toml.
+  std::string at(const std::string& text, const std::string& needle) const {
+    return path_ + ":" + std::to_string(line_of(text, needle)) + ": ";
+  }
+
+  fs::path dir_;
+  std::string path_;
+};
+
+TEST_F(SceneFile, BaseSceneLoads) {
+  path_ = write("x.toml", kBase);
+  const Scene s = load_scene(path_);
+  EXPECT_EQ(s.name, "t");
+  EXPECT_EQ(s.dimension, 3);
+  EXPECT_EQ(s.grains.count, 100);
+  ASSERT_EQ(s.grains.components.size(), 1u);
+  EXPECT_EQ(s.grains.components[0].radius.kind, RadiusSpec::Kind::Constant);
+  EXPECT_DOUBLE_EQ(s.grains.components[0].radius.value, 1e-3);
+  EXPECT_EQ(s.container.kind, ContainerKind::Box);
+  EXPECT_DOUBLE_EQ(s.container.size_y, 0.02);
+  EXPECT_EQ(s.source.kind, SourceSpec::Kind::Rain);
+}
+
+TEST(SceneInputs, EveryShippedSceneLoads) {
+  int n = 0;
+  for (const auto& entry : fs::directory_iterator(fs::path(BTR_SOURCE_DIR) / "inputs")) {
+    if (entry.path().extension() != ".toml") continue;
+    SCOPED_TRACE(entry.path().string());
+    ++n;
+    Scene s;
+    ASSERT_NO_THROW(s = load_scene(entry.path().string()));
+    EXPECT_EQ(s.name, entry.path().stem().string());
+    EXPECT_GT(s.grains.count, 0);
+    DropSequence drops(s, s.seed);
+    EXPECT_EQ(drops.count(), s.grains.count);
+    const Drop d = drops.next();
+    EXPECT_GE(d.r, drops.r_min());
+    EXPECT_LE(d.r, drops.r_max());
+  }
+  EXPECT_GE(n, 9);
+}
+
+TEST(SceneInputs, MixtureAndListScenesAreReadAsWritten) {
+  const Scene bi = load_scene(std::string(BTR_SOURCE_DIR) + "/inputs/bidisperse_heap.toml");
+  EXPECT_EQ(bi.grains.fraction_by, GrainsSpec::FractionBy::Volume);
+  ASSERT_EQ(bi.grains.components.size(), 2u);
+  EXPECT_EQ(bi.grains.components[1].species, 2);
+  EXPECT_DOUBLE_EQ(bi.grains.components[1].radius.value, 1.0e-3);
+
+  const Scene list = load_scene(std::string(BTR_SOURCE_DIR) + "/inputs/drops_list.toml");
+  EXPECT_EQ(list.grains.count, 28);  // the CSV's data rows
+  EXPECT_TRUE(fs::exists(list.source.file)) << list.source.file;
+  ASSERT_EQ(list.grains.components.size(), 2u);
+  // Species 2 overrides density and two material keys; the rest comes from [material].
+  const Material& steel = list.grains.components[1].material;
+  EXPECT_DOUBLE_EQ(list.grains.components[1].density, 7800.0);
+  EXPECT_DOUBLE_EQ(steel.young, 2e7);
+  EXPECT_DOUBLE_EQ(steel.restitution, 0.6);
+  EXPECT_DOUBLE_EQ(steel.poisson, 0.25);
+  EXPECT_DOUBLE_EQ(list.grains.components[0].material.young, 1e7);
+  EXPECT_EQ(list.grains.components[1].radius.list.size(), 4u);   // 4 large rows
+  EXPECT_EQ(list.grains.components[0].radius.list.size(), 24u);  // 24 small rows
+}
+
+TEST_F(SceneFile, UnknownKeyNamesFileLineAndAllowedKeys) {
+  const std::string text = replace(kBase, "size = [0.02, 0.02]", "sise = [0.02, 0.02]");
+  EXPECT_EQ(error_of(text),
+            at(text, "sise") + "unknown key 'sise' in [container]; allowed: kind, size, gap, radius, height");
+}
+
+TEST_F(SceneFile, UnknownKeyInsideAnInlineTable) {
+  const std::string text = replace(kBase, "value = 1e-3", "valeu = 1e-3");
+  EXPECT_EQ(error_of(text), at(text, "valeu") +
+                                "unknown key 'valeu' in grains.radius; allowed: distribution, value, min, max, values");
+}
+
+TEST_F(SceneFile, UnknownTableIsAnError) {
+  const std::string text = kBase + "\n[materail]\nyoung = 1e7\n";
+  EXPECT_NE(error_of(text).find(at(text, "[materail]") + "unknown key 'materail' in the top level of the file"), std::string::npos)
+      << error_of(text);
+}
+
+TEST_F(SceneFile, WrongTypeNamesTheType) {
+  const std::string text = replace(kBase, "count = 100", "count = \"100\"");
+  EXPECT_EQ(error_of(text), at(text, "count") + "grains.count: expected a positive integer, got the string \"100\"");
+}
+
+TEST_F(SceneFile, FloatCountIsRejected) {
+  const std::string text = replace(kBase, "count = 100", "count = 100.5");
+  EXPECT_EQ(error_of(text), at(text, "count") + "grains.count: expected a positive integer, got 100.5");
+}
+
+TEST_F(SceneFile, CountZero) {
+  const std::string text = replace(kBase, "count = 100", "count = 0");
+  EXPECT_EQ(error_of(text), at(text, "count") + "grains.count: expected a positive integer, got 0");
+}
+
+TEST_F(SceneFile, MissingCount) {
+  const std::string text = replace(kBase, "count = 100\n", "");
+  EXPECT_EQ(error_of(text), at(text, "[grains]") + "grains.count: missing; expected a positive integer");
+}
+
+TEST_F(SceneFile, NegativeRadius) {
+  const std::string text = replace(kBase, "value = 1e-3", "value = -1e-3");
+  EXPECT_EQ(error_of(text), at(text, "value") + "grains.radius.value: expected a positive radius [m], got -0.001");
+}
+
+TEST_F(SceneFile, MinNotBelowMax) {
+  const std::string text = replace(kBase, "{ distribution = \"constant\", value = 1e-3 }",
+                                   "{ distribution = \"uniform\", min = 1e-3, max = 1e-3 }");
+  EXPECT_EQ(error_of(text),
+            at(text, "uniform") + "grains.radius.max: expected a radius [m] larger than min = 0.001, got 0.001");
+}
+
+TEST_F(SceneFile, KeyOfAnotherDistributionIsAnError) {
+  const std::string text = replace(kBase, "value = 1e-3", "value = 1e-3, max = 2e-3");
+  EXPECT_NE(error_of(text).find("grains.radius.max: not used by distribution = \"constant\""), std::string::npos)
+      << error_of(text);
+}
+
+TEST_F(SceneFile, GrainWiderThanTheHeleShawGap) {
+  const std::string text = replace(kBase, "kind = \"box\"\nsize = [0.02, 0.02]",
+                                   "kind = \"hele-shaw\"\nsize = [0.05]\ngap = 1.5e-3");
+  EXPECT_EQ(error_of(text), at(text, "gap") +
+                                "container.gap: expected at least the diameter of the largest grain "
+                                "(r_max = 0.001 m), 2 r_max = 0.002 m, got 0.0015");
+}
+
+TEST_F(SceneFile, GrainWiderThanTheBox) {
+  const std::string text = replace(kBase, "size = [0.02, 0.02]", "size = [0.02, 0.0015]");
+  const std::string msg = error_of(text);
+  EXPECT_EQ(msg.rfind(at(text, "size") + "container.size: expected widths of at least", 0), 0u) << msg;
+}
+
+TEST_F(SceneFile, CylinderIn2D) {
+  std::string text = replace(kBase, "dimension = 3", "dimension = 2");
+  text = replace(text, "kind = \"box\"\nsize = [0.02, 0.02]", "kind = \"cylinder\"\nradius = 0.01");
+  EXPECT_EQ(error_of(text), at(text, "\"cylinder\"") +
+                                "container.kind: expected \"open\", \"box\" or \"periodic\" for dimension 2 "
+                                "(cylinder is 3D only), got \"cylinder\"");
+}
+
+TEST_F(SceneFile, SizeVectorOfTheWrongLength) {
+  const std::string text = replace(kBase, "dimension = 3", "dimension = 2");
+  EXPECT_EQ(error_of(text), at(text, "size") +
+                                "container.size: expected [x] for dimension 2: the positive width [m], "
+                                "got an array of 2");
+}
+
+TEST_F(SceneFile, FractionsNotSummingToOne) {
+  const std::string text = replace(kBase, "radius = { distribution = \"constant\", value = 1e-3 }\n",
+                                   "radius = { distribution = \"constant\", value = 1e-3 }\n"
+                                   "[[grains.component]]\nspecies = 1\nfraction = 0.5\n"
+                                   "[[grains.component]]\nspecies = 2\nfraction = 0.4\n");
+  EXPECT_EQ(error_of(text), at(text, "[[grains.component]]") +
+                                "grains.component: expected fractions summing to 1 (within 1e-9), got a sum of 0.9");
+}
+
+TEST_F(SceneFile, DuplicateSpecies) {
+  const std::string text = replace(kBase, "radius = { distribution = \"constant\", value = 1e-3 }\n",
+                                   "radius = { distribution = \"constant\", value = 1e-3 }\n"
+                                   "[[grains.component]]\nspecies = 2\nfraction = 0.5\n"
+                                   "[[grains.component]]\nspecies = 2 # again\nfraction = 0.5\n");
+  EXPECT_EQ(error_of(text), at(text, "species = 2 # again") +
+                                "grains.component#2.species: expected distinct species ids 1..2, got 2 twice");
+}
+
+TEST_F(SceneFile, RestitutionZero) {
+  const std::string text = kBase + "\n[material]\nrestitution = 0.0\n";
+  EXPECT_EQ(error_of(text), at(text, "restitution") + "material.restitution: expected a restitution in (0, 1], got 0");
+}
+
+TEST_F(SceneFile, PoissonOutOfRange) {
+  const std::string text = kBase + "\n[material]\npoisson = 0.5\n";
+  EXPECT_EQ(error_of(text),
+            at(text, "poisson") + "material.poisson: expected a Poisson ratio in (-1, 0.5), got 0.5");
+}
+
+TEST_F(SceneFile, RainOnAnOpenFloor) {
+  const std::string text = replace(kBase, "kind = \"box\"\nsize = [0.02, 0.02]", "kind = \"open\"");
+  const std::string msg = error_of(text);
+  EXPECT_EQ(msg.rfind(at(text, "\"rain\"") + "source.kind: expected \"point\" or \"region\" on an open floor", 0),
+            0u)
+      << msg;
+}
+
+TEST_F(SceneFile, PointSourceOutsideTheBox) {
+  // Half-width 0.01, r = 0.001: centres must satisfy |x| + scatter <= 0.009.
+  const std::string text = replace(kBase, "kind = \"rain\"", "kind = \"point\"\nposition = [0.0085, 0.0]\nscatter = 0.001");
+  const std::string msg = error_of(text);
+  EXPECT_EQ(msg.rfind(at(text, "position") + "source.position: expected drops", 0), 0u) << msg;
+  const std::string inside = replace(kBase, "kind = \"rain\"", "kind = \"point\"\nposition = [0.0075, 0.0]\nscatter = 0.001");
+  EXPECT_EQ(error_of(inside), "");
+}
+
+TEST_F(SceneFile, RegionOutsideTheCylinder) {
+  // Corner (0.006, 0.006) is 0.00849 from the axis; R - r = 0.008.
+  const std::string text = replace(replace(kBase, "kind = \"box\"\nsize = [0.02, 0.02]", "kind = \"cylinder\"\nradius = 0.009"),
+                                   "kind = \"rain\"", "kind = \"region\"\nx = [-0.006, 0.006]\ny = [-0.006, 0.006]");
+  const std::string msg = error_of(text);
+  EXPECT_EQ(msg.rfind(at(text, "x = [") + "source.x, source.y: expected a region", 0), 0u) << msg;
+  // The same region fits a wider cylinder.
+  EXPECT_EQ(error_of(replace(text, "radius = 0.009", "radius = 0.0096")), "");
+}
+
+TEST_F(SceneFile, ListFileMissing) {
+  std::string text = replace(kBase, "kind = \"rain\"", "kind = \"list\"\nfile = \"nope.csv\"");
+  text = replace(text, "radius = { distribution = \"constant\", value = 1e-3 }\n", "");
+  const std::string msg = error_of(text);
+  EXPECT_EQ(msg, at(text, "nope.csv") + "source.file: cannot open '" + (dir_ / "nope.csv").string() + "'");
+}
+
+TEST_F(SceneFile, ListFileMalformedNamesItsLine) {
+  const std::string csv = write("d.csv", "x,y,r\n0,0,1e-3\n0.001,abc,1e-3\n");
+  std::string text = replace(kBase, "kind = \"rain\"", "kind = \"list\"\nfile = \"d.csv\"");
+  text = replace(text, "radius = { distribution = \"constant\", value = 1e-3 }\n", "");
+  EXPECT_EQ(error_of(text), csv + ":3: y: expected a number, got 'abc'");
+}
+
+TEST_F(SceneFile, ListDropOutsideTheBox) {
+  const std::string csv = write("d.csv", "# comment\n0,0,1e-3\n0.0095,0,1e-3\n");
+  std::string text = replace(kBase, "kind = \"rain\"", "kind = \"list\"\nfile = \"d.csv\"");
+  text = replace(text, "count = 100\n", "");
+  text = replace(text, "radius = { distribution = \"constant\", value = 1e-3 }\n", "");
+  const std::string msg = error_of(text);
+  EXPECT_EQ(msg.rfind(csv + ":3: expected a drop that keeps its grain", 0), 0u) << msg;
+}
+
+TEST_F(SceneFile, ListCountLargerThanTheFile) {
+  write("d.csv", "0,0,1e-3\n0.001,0,1e-3\n");
+  std::string text = replace(kBase, "kind = \"rain\"", "kind = \"list\"\nfile = \"d.csv\"");
+  text = replace(text, "radius = { distribution = \"constant\", value = 1e-3 }\n", "");
+  const std::string msg = error_of(text);
+  EXPECT_EQ(msg.rfind(at(text, "count") + "grains.count: expected at most the 2 rows of", 0), 0u) << msg;
+}
+
+TEST_F(SceneFile, RadiusWithAListSourceIsAnError) {
+  write("d.csv", "0,0,1e-3\n");
+  const std::string text = replace(replace(kBase, "kind = \"rain\"", "kind = \"list\"\nfile = \"d.csv\""),
+                                   "count = 100\n", "");
+  EXPECT_EQ(error_of(text).rfind(at(text, "radius") + "grains.radius: not used with source.kind = \"list\"", 0), 0u)
+      << error_of(text);
+}
+
+TEST_F(SceneFile, TomlSyntaxErrorNamesTheLine) {
+  const std::string text = replace(kBase, "count = 100", "count = = 100");
+  const std::string msg = error_of(text);
+  EXPECT_EQ(msg.rfind(at(text, "count") + "TOML syntax error", 0), 0u) << msg;
+}
+
+TEST_F(SceneFile, MissingTable) {
+  const std::string text = replace(kBase, "[source]\nkind = \"rain\"\n", "");
+  EXPECT_EQ(error_of(text), path_ + ": missing table [source]");
+}
+
+TEST_F(SceneFile, MissingFile) {
+  try {
+    load_scene((dir_ / "absent.toml").string());
+    FAIL() << "no error";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(std::string(e.what()), (dir_ / "absent.toml").string() + ": cannot open the scene file");
+  }
+}
+
+}  // namespace
+}  // namespace btr

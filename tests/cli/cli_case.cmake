@@ -1,0 +1,83 @@
+# One end-to-end case of the `btr` program, run by ctest:
+#   cmake -DBTR=<program> -DINPUTS=<inputs dir> -DWORK=<scratch dir> -DCASE=<case>
+#         [-DSCENE=<name in inputs/>] [-DCOUNT=<grains>] -P cli_case.cmake
+# Cases: deterministic, check, missing_scene, unknown_key. Fails with message(FATAL_ERROR).
+cmake_minimum_required(VERSION 3.18)
+
+# Runs the program; sets <prefix>_code and <prefix>_text (stdout + stderr).
+function(run_btr prefix)
+  execute_process(COMMAND ${BTR} ${ARGN} RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  set(${prefix}_code "${code}" PARENT_SCOPE)
+  set(${prefix}_text "${out}${err}" PARENT_SCOPE)
+endfunction()
+
+function(expect_code prefix expected)
+  if(NOT "${${prefix}_code}" STREQUAL "${expected}")
+    message(FATAL_ERROR "btr exited with '${${prefix}_code}', expected ${expected}. Output:\n${${prefix}_text}")
+  endif()
+endfunction()
+
+function(expect_mentions prefix needle)
+  string(FIND "${${prefix}_text}" "${needle}" at)
+  if(at EQUAL -1)
+    message(FATAL_ERROR "the message does not mention '${needle}':\n${${prefix}_text}")
+  endif()
+endfunction()
+
+file(REMOVE_RECURSE "${WORK}")
+file(MAKE_DIRECTORY "${WORK}")
+set(scene "${INPUTS}/${SCENE}.toml")
+
+if(CASE STREQUAL "deterministic")
+  # Same seed twice: byte-identical CSV files. Another seed: different ones.
+  foreach(run a b c)
+    set(seed 7)
+    if(run STREQUAL "c")
+      set(seed 8)
+    endif()
+    run_btr(r deposit "${scene}" -o "${WORK}/${run}" --seed ${seed} --count ${COUNT} --quiet)
+    expect_code(r 0)
+  endforeach()
+  file(GLOB csvs RELATIVE "${WORK}/a" "${WORK}/a/*.csv")
+  if(NOT csvs)
+    message(FATAL_ERROR "no CSV file written in ${WORK}/a")
+  endif()
+  foreach(csv ${csvs})
+    file(STRINGS "${WORK}/a/${csv}" lines)
+    list(LENGTH lines n)
+    list(GET lines 0 header)
+    math(EXPR expected_lines "${COUNT} + 1")
+    if(NOT header STREQUAL "id,x,y,z,radius,species" OR NOT n EQUAL expected_lines)
+      message(FATAL_ERROR "${csv}: header '${header}' and ${n} lines, expected the packing header and ${expected_lines} lines")
+    endif()
+    execute_process(COMMAND ${CMAKE_COMMAND} -E compare_files "${WORK}/a/${csv}" "${WORK}/b/${csv}" RESULT_VARIABLE same)
+    if(NOT same EQUAL 0)
+      message(FATAL_ERROR "${csv} differs between two runs with the same seed")
+    endif()
+    execute_process(COMMAND ${CMAKE_COMMAND} -E compare_files "${WORK}/a/${csv}" "${WORK}/c/${csv}" RESULT_VARIABLE same)
+    if(same EQUAL 0)
+      message(FATAL_ERROR "${csv} is identical for seeds 7 and 8")
+    endif()
+  endforeach()
+
+elseif(CASE STREQUAL "check")
+  run_btr(r deposit "${scene}" -o "${WORK}/out" --check --quiet)
+  expect_code(r 0)
+
+elseif(CASE STREQUAL "missing_scene")
+  run_btr(r deposit "${WORK}/no_such_scene.toml" -o "${WORK}/out")
+  expect_code(r 2)
+  expect_mentions(r "no_such_scene.toml")
+
+elseif(CASE STREQUAL "unknown_key")
+  file(READ "${scene}" text)
+  string(REPLACE "[scene]\n" "[scene]\ntypo_key = 1\n" text "${text}")
+  file(WRITE "${WORK}/typo_scene.toml" "${text}")
+  run_btr(r deposit "${WORK}/typo_scene.toml" -o "${WORK}/out")
+  expect_code(r 2)
+  expect_mentions(r "typo_scene.toml")
+  expect_mentions(r "typo_key")
+
+else()
+  message(FATAL_ERROR "unknown case '${CASE}'")
+endif()

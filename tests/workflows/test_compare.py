@@ -1,0 +1,79 @@
+"""`compare PRE POST` on packings written by the test: outputs, numbers and failure messages."""
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from btrdem.compare import compare
+from btrdem.io import InputError, Packing, read_vtp_arrays, write_packing
+from lattices import fcc
+
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+def scene_json(L):
+    return {"dimension": 3, "container": {"kind": "periodic", "size_x": L, "size_y": L, "gap": 0.0, "radius": 0.0,
+                                          "height": 0.0}}
+
+
+def write(tmp_path, name, pos, r, meta):
+    n = len(r)
+    p = Packing(ids=np.arange(1, n + 1), pos=pos, radius=r, species=np.ones(n, int), meta=meta)
+    return write_packing(tmp_path / name, name, p)["csv"]
+
+
+@pytest.fixture
+def pair(tmp_path):
+    pos, r, L = fcc(5, 5, d=2e-3)
+    meta = scene_json(L)
+    post = pos + np.array([0.3, 0.0, 0.0]) * 2e-3
+    post[:, 0] = np.mod(post[:, 0] + 0.5 * L, L) - 0.5 * L
+    moved = np.arange(0, len(r), 10)  # every tenth grain moves a further 0.4 d up
+    post[moved, 2] += 0.4 * 2e-3
+    return write(tmp_path, "pre", pos, r, meta), write(tmp_path, "post", post, r, meta), moved, len(r)
+
+
+def test_compare_outputs_and_numbers(tmp_path, pair):
+    pre, post, moved, n = pair
+    out = tmp_path / "cmp"
+    res = compare(pre, post, str(out), progress=lambda m: None)
+    expected = np.full(n, 0.3)
+    expected[moved] = np.hypot(0.3, 0.4)
+    st = res["displacement_d"]
+    assert st["mean"] == pytest.approx(expected.mean())
+    assert st["max"] == pytest.approx(0.5)
+    assert st["fraction_above_0.1"] == 1.0
+    assert st["fraction_above_0.5"] == 0.0  # 0.5 exactly is not above 0.5
+    # the lattice itself is unchanged in the rigidly shifted part; the raised grains break contacts
+    assert res["structure"]["pre"]["coordination"]["mean"] == 12.0
+    assert res["structure"]["post"]["coordination"]["mean"] < 12.0
+    saved = json.loads((out / "compare.json").read_text())
+    assert saved["displacement_d"]["mean"] == pytest.approx(st["mean"])
+    for name in ("displacement_histogram", "displacement_vs_height", "rdf", "surface_profile"):
+        assert (out / "figures" / f"{name}.png").read_bytes()[:8] == PNG
+    md = (out / "compare.md").read_text()
+    assert "| packing fraction (bulk) |" in md and "fraction > 0.1 d" in md and "BTR support" in md
+    vtp = read_vtp_arrays(out / "pre_displacement.vtp")
+    assert np.allclose(vtp["displacement"], expected)
+    assert np.allclose(vtp["radius"], 1e-3)
+    rows = (out / "per_grain.csv").read_text().splitlines()
+    assert len(rows) == n + 1 and rows[0].startswith("id,displacement_d,n_supports")
+
+
+def test_compare_refuses_different_ids(tmp_path, pair):
+    pre, post, _, _ = pair
+    lines = open(post).read().splitlines()
+    open(post, "w").write("\n".join(lines[:-1]) + "\n")
+    with pytest.raises(InputError, match="expected the same grain ids"):
+        compare(pre, post, str(tmp_path / "cmp"), progress=lambda m: None)
+
+
+def test_cli_compare_reports_bad_input(tmp_path, source_dir):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("id,x,y,z,r,species\n1,0,0,0,1,1\n")
+    p = subprocess.run([sys.executable, str(source_dir / "workflows" / "btr_workflow.py"), "compare", str(bad), str(bad),
+                        "-o", str(tmp_path / "o")], capture_output=True, text=True)
+    assert p.returncode == 2
+    assert "bad.csv:1: expected the header 'id,x,y,z,radius,species'" in p.stderr

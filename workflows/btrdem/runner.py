@@ -1,0 +1,200 @@
+"""Running programs and recording runs.
+
+Every workflow writes into its own output folder a run.json that names the command line, the
+inputs (copied into the folder), the program versions, and each step with its status, wall time,
+outputs and error. It is rewritten after every step, so a failed step leaves a clear error next to
+what the earlier steps wrote."""
+from __future__ import annotations
+
+import contextlib
+import datetime
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from .io import read_json, write_json
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+class StepFailed(Exception):
+    """A workflow step failed; the message says which and why."""
+
+
+def find_btr() -> str:
+    """The `btr` program: $BTR_BINARY, else build/app/btr in the repository."""
+    env = os.environ.get("BTR_BINARY")
+    if env:
+        if not os.access(env, os.X_OK):
+            raise StepFailed(f"BTR_BINARY={env}: not an executable file")
+        return env
+    default = REPO / "build" / "app" / "btr"
+    if os.access(default, os.X_OK):
+        return str(default)
+    raise StepFailed(f"the btr program was not found: set BTR_BINARY or build it into {default} "
+                     "(scripts/setup.sh)")
+
+
+def _tail(path, n=15) -> str:
+    try:
+        with open(path, errors="replace") as f:
+            lines = f.readlines()
+        return "".join(lines[-n:])
+    except OSError:
+        return ""
+
+
+def _last_line(path) -> str:
+    try:
+        with open(path, "rb") as f:
+            f.seek(0, os.SEEK_END)
+            size = f.tell()
+            f.seek(max(0, size - 4096))
+            lines = [x for x in f.read().decode(errors="replace").splitlines() if x.strip()]
+        return lines[-1].strip()[:120] if lines else ""
+    except OSError:
+        return ""
+
+
+def run_command(argv, cwd, label: str, progress=print, heartbeat: float = 15.0, env: dict | None = None,
+                watch: str | None = None, timeout: float | None = None, stdout_name: str | None = None) -> dict:
+    """Runs argv in cwd with stdout and stderr in cwd/<label>.stdout / .stderr, printing a progress line
+    every `heartbeat` seconds (with the last line of `watch`, a log file the program writes).
+    Returns {returncode, wall_seconds, stdout, stderr}; never raises on a non-zero exit."""
+    cwd = Path(cwd)
+    cwd.mkdir(parents=True, exist_ok=True)
+    safe = label.replace(" ", "_").replace("/", "_")
+    out_path = cwd / (stdout_name or f"{safe}.stdout")
+    err_path = cwd / f"{safe}.stderr"
+    full_env = dict(os.environ)
+    full_env.update(env or {})
+    t0 = time.monotonic()
+    with open(out_path, "w") as out, open(err_path, "w") as err:
+        try:
+            proc = subprocess.Popen([str(a) for a in argv], cwd=cwd, stdout=out, stderr=err, env=full_env)
+        except OSError as e:
+            raise StepFailed(f"{label}: cannot start {argv[0]}: {e}") from None
+        next_beat = t0 + heartbeat
+        while True:
+            try:
+                rc = proc.wait(timeout=1.0)
+                break
+            except subprocess.TimeoutExpired:
+                now = time.monotonic()
+                if timeout is not None and now - t0 > timeout:
+                    proc.kill()
+                    proc.wait()
+                    raise StepFailed(f"{label}: killed after {timeout:.0f} s (time limit)")
+                if now >= next_beat:
+                    last = _last_line(watch) if watch else _last_line(out_path) or _last_line(err_path)
+                    progress(f"  [{label}] running {now - t0:.0f} s{': ' + last if last else ''}")
+                    next_beat = now + heartbeat
+    return {"returncode": rc, "wall_seconds": time.monotonic() - t0, "stdout": str(out_path), "stderr": str(err_path)}
+
+
+def require_success(res: dict, label: str, log: str | None = None):
+    if res["returncode"] != 0:
+        detail = _tail(res["stderr"]) or _tail(res["stdout"])
+        if log:
+            detail += ("\n--- " + log + " ---\n" + _tail(log)) if os.path.exists(log) else ""
+        raise StepFailed(f"{label}: exit status {res['returncode']}\n{detail.rstrip()}")
+
+
+def _cmd_version(argv) -> str | None:
+    try:
+        p = subprocess.run(argv, capture_output=True, text=True, timeout=30)
+        return (p.stdout.strip() or p.stderr.strip()).splitlines()[0] if (p.stdout or p.stderr) else None
+    except (OSError, subprocess.TimeoutExpired, IndexError):
+        return None
+
+
+def _dpkg_version(pkg) -> str | None:
+    try:
+        p = subprocess.run(["dpkg-query", "-W", "-f=${Version}", pkg], capture_output=True, text=True, timeout=30)
+        return p.stdout.strip() or None
+    except (OSError, subprocess.TimeoutExpired):
+        return None
+
+
+def versions(btr: str | None = None) -> dict:
+    import matplotlib
+    import numpy
+    import scipy
+
+    from . import __version__
+
+    v = {"btrdem_workflows": __version__, "python": platform.python_version(), "numpy": numpy.__version__,
+         "scipy": scipy.__version__, "matplotlib": matplotlib.__version__, "platform": platform.platform(),
+         "liggghts_package": _dpkg_version("liggghts"), "yade_package": _dpkg_version("yade"),
+         "openmpi_package": _dpkg_version("openmpi-bin")}
+    if btr:
+        v["btr"] = _cmd_version([btr, "--version"])
+        v["btr_path"] = btr
+    return v
+
+
+class RunRecord:
+    """OUTDIR/run.json: what was run, with which inputs and versions, and how each step went."""
+
+    def __init__(self, outdir, workflow: str, argv=None, inputs=(), btr: str | None = None, progress=print,
+                 settings: dict | None = None):
+        self.outdir = Path(outdir)
+        self.outdir.mkdir(parents=True, exist_ok=True)
+        self.path = self.outdir / "run.json"
+        self.progress = progress
+        (self.outdir / "inputs").mkdir(exist_ok=True)
+        copied = []
+        for src in inputs:
+            if src and os.path.exists(src):
+                dst = self.outdir / "inputs" / Path(src).name
+                if Path(src).resolve() != dst.resolve():
+                    shutil.copy2(src, dst)
+                copied.append({"original": os.path.abspath(src), "copy": str(dst)})
+        self.data = {"workflow": workflow, "command": [sys.executable] + list(argv if argv is not None else sys.argv),
+                     "cwd": os.getcwd(), "started": datetime.datetime.now().isoformat(timespec="seconds"),
+                     "inputs": copied, "settings": settings or {}, "versions": versions(btr), "steps": [],
+                     "status": "running"}
+        self.save()
+
+    def save(self):
+        write_json(self.path, self.data)
+
+    @contextlib.contextmanager
+    def step(self, name: str):
+        """Times a step and records it; on failure records the error and raises StepFailed."""
+        entry = {"name": name, "status": "running", "started": datetime.datetime.now().isoformat(timespec="seconds")}
+        self.data["steps"].append(entry)
+        self.save()
+        self.progress(f"== {name}")
+        t0 = time.monotonic()
+        try:
+            yield entry
+        except BaseException as e:
+            entry.update(status="failed", wall_seconds=time.monotonic() - t0, error=str(e))
+            self.data["status"] = "failed"
+            self.data["failed_step"] = name
+            self.save()
+            if isinstance(e, StepFailed):
+                raise
+            if isinstance(e, KeyboardInterrupt):
+                raise
+            raise StepFailed(f"{name}: {type(e).__name__}: {e}") from e
+        entry.update(status="ok", wall_seconds=time.monotonic() - t0)
+        self.save()
+        self.progress(f"   {name}: done in {entry['wall_seconds']:.1f} s")
+
+    def finish(self, summary: dict | None = None):
+        self.data["status"] = "ok"
+        self.data["finished"] = datetime.datetime.now().isoformat(timespec="seconds")
+        if summary:
+            self.data["summary"] = summary
+        self.save()
+
+
+def previous_record(outdir) -> dict | None:
+    p = Path(outdir) / "run.json"
+    return read_json(p) if p.exists() else None
