@@ -21,6 +21,9 @@ namespace {
 constexpr int kMaxContacts = 8;
 // Arc parameter skipped after a tangency with a contact the grain is leaving (radians).
 constexpr double kSkipTangency = 1e-9;
+// A contact touched at the start of a path is met only if the path heads into it at least this
+// steeply (cosine of the angle with its normal); below it the path is tangent up to round-off.
+constexpr double kApproach = 1e-9;
 
 // splitmix64: a deterministic hash for tie-breaks (which way a grain balanced on a top rolls).
 std::uint64_t mix(std::uint64_t z) {
@@ -135,7 +138,7 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
     // Touching at the start: an event now if approaching; otherwise skip the tangency itself
     // (round-off puts a root there) and look for the next crossing.
     const bool touching = std::abs(K + a - R2) <= 1e-9 * R2;
-    if (touching && b < -1e-12 * R2) { ev.offer(0.0, o, t_tol); return; }
+    if (touching && b < -2.0 * kApproach * arc.rho * o.R) { ev.offer(0.0, o, t_tol); return; }
     double t = first_rising_root(-a, -b, K - R2, touching ? kSkipTangency : 0.0, ev.t + t_tol);
     if (t >= 0.0) ev.offer(t, o, t_tol);
   };
@@ -144,7 +147,7 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
     const double g0 = o.c.dot(arc.C) - o.R;
     const double a = arc.rho * o.c.dot(arc.u), b = arc.rho * o.c.dot(arc.v);
     const bool touching = std::abs(g0 + a) <= 1e-9 * r;
-    if (touching && b < -1e-12 * r) { ev.offer(0.0, o, t_tol); return; }
+    if (touching && b < -kApproach * arc.rho) { ev.offer(0.0, o, t_tol); return; }
     double t = first_rising_root(-a, -b, g0, touching ? kSkipTangency : 0.0, ev.t + t_tol);
     if (t >= 0.0) ev.offer(t, o, t_tol);
   };
