@@ -23,100 +23,118 @@ struct Range {
   std::uint32_t begin = 0, end = 0;
 };
 
-// Hashed uniform grid over a subset of the grains: sorted by cell, a hash map from cell key to the
-// range of its grains. Cells are at least `reach` wide, so every grain within reach of a point is in
-// the 3x3x3 block of cells around it. Periodic axes have a whole number of cells per period and
-// wrap their indices.
-class CellGrid {
+// A copy of one grain's data, stored contiguously in grid order.
+struct Entry {
+  Vec3 x;
+  double r;
+  std::uint32_t id;  // index into the packing
+};
+
+// Hashed grid of vertical columns over a subset of the grains: entries sorted by column, then by z;
+// a hash map from column to its range of entries. Columns are at least `reach` wide, so every
+// grain within reach of a point is in the 3x3 block of columns around it, within reach in z.
+// Periodic axes have a whole number of columns per period and wrap their indices.
+class ColumnGrid {
  public:
-  CellGrid(const Grains& grains, const std::vector<std::uint32_t>& members, int dimension,
-           const Container& c, double reach) {
-    periodic_[0] = c.kind == ContainerKind::Periodic;
-    periodic_[1] = periodic_[0] && dimension == 3;
+  ColumnGrid(const Grains& grains, const std::vector<std::uint32_t>& members, int dimension,
+             const Container& c, double reach)
+      : reach_(reach) {
     period_[0] = c.size_x;
     period_[1] = c.size_y;
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    periodic_[0] = c.kind == ContainerKind::Periodic && std::isfinite(c.size_x) && c.size_x > 0;
+    periodic_[1] = c.kind == ContainerKind::Periodic && dimension == 3 && std::isfinite(c.size_y) && c.size_y > 0;
+    double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
     for (std::uint32_t i : members)
-      for (int a = 0; a < 3; ++a) {
+      for (int a = 0; a < 2; ++a) {
         lo[a] = std::min(lo[a], grains[i].x[a]);
         hi[a] = std::max(hi[a], grains[i].x[a]);
       }
-    // Keep every axis within 2^20 cells so that a key packs into 63 bits.
-    const double max_cells = double(1 << 20) - 8;
-    cell_ = reach;
-    for (int a = 0; a < 3; ++a)
-      if (hi[a] > lo[a]) cell_ = std::max(cell_, (hi[a] - lo[a]) / max_cells);
-    for (int a = 0; a < 3; ++a) {
-      origin_[a] = std::isfinite(lo[a]) ? lo[a] : 0.0;
-      size_[a] = std::isfinite(lo[a]) ? std::int64_t(std::floor((hi[a] - lo[a]) / cell_)) + 1 : 1;
-      width_[a] = cell_;
-    }
+    // Keep both axes within 2^31 columns so that a key packs into 64 bits.
+    double width = reach;
     for (int a = 0; a < 2; ++a)
+      if (hi[a] > lo[a]) width = std::max(width, (hi[a] - lo[a]) / double(1u << 30));
+    for (int a = 0; a < 2; ++a) {
+      origin_[a] = std::isfinite(lo[a]) ? lo[a] : 0.0;
+      size_[a] = std::isfinite(lo[a]) ? std::int64_t(std::floor((hi[a] - lo[a]) / width)) + 1 : 1;
+      width_[a] = width;
       if (periodic_[a]) {
-        size_[a] = std::max<std::int64_t>(1, std::int64_t(std::floor(period_[a] / cell_)));
+        size_[a] = std::max<std::int64_t>(1, std::int64_t(std::floor(period_[a] / width)));
         width_[a] = period_[a] / size_[a];
         origin_[a] = -0.5 * period_[a];
       }
-
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;
-    keyed.reserve(members.size());
-    for (std::uint32_t i : members) {
-      const Index c3 = index(grains[i].x);
-      keyed.emplace_back(key(c3), i);
     }
-    std::sort(keyed.begin(), keyed.end());
-    order_.resize(keyed.size());
-    cells_.reserve(keyed.size());
+
+    struct Keyed {
+      std::uint64_t key;
+      double z;
+      std::uint32_t id;
+    };
+    std::vector<Keyed> keyed;
+    keyed.reserve(members.size());
+    for (std::uint32_t i : members) keyed.push_back({key(column(grains[i].x)), grains[i].x.z(), i});
+    std::sort(keyed.begin(), keyed.end(), [](const Keyed& p, const Keyed& q) {
+      return p.key != q.key ? p.key < q.key : p.z < q.z;
+    });
+    entries_.resize(keyed.size());
+    columns_.reserve(keyed.size());
     for (std::size_t k = 0; k < keyed.size(); ++k) {
-      order_[k] = keyed[k].second;
-      Range& r = cells_[keyed[k].first];
+      const Grain& g = grains[keyed[k].id];
+      entries_[k] = {g.x, g.r, keyed[k].id};
+      Range& r = columns_[keyed[k].key];
       if (r.end == 0) r.begin = std::uint32_t(k);
       r.end = std::uint32_t(k + 1);
     }
   }
 
-  // Calls f(j) once for every grain j in the 3x3x3 block of cells around position p.
+  // The grains of this grid, in grid order (neighbours in space are mostly neighbours here).
+  const std::vector<Entry>& entries() const { return entries_; }
+
+  // Calls f(entry) once for every grain of the 3x3 columns around p whose z is within `reach` of
+  // p's (reach at most the column width).
   template <class F>
-  void for_each_near(const Vec3& p, F&& f) const {
-    const Index c = index(p);
-    std::int64_t cand[3][3];
-    int count[3];
-    for (int a = 0; a < 3; ++a) count[a] = neighbours(a, c[a], cand[a]);
+  void for_each_near(const Vec3& p, double reach, F&& f) const {
+    const Column c = column(p);
+    std::int64_t cand[2][3];
+    int count[2];
+    for (int a = 0; a < 2; ++a) count[a] = neighbours(a, c[a], cand[a]);
+    reach = std::min(reach, reach_);
+    const double z_lo = p.z() - reach, z_hi = p.z() + reach;
     for (int i = 0; i < count[0]; ++i)
-      for (int j = 0; j < count[1]; ++j)
-        for (int k = 0; k < count[2]; ++k) {
-          auto it = cells_.find(key({cand[0][i], cand[1][j], cand[2][k]}));
-          if (it == cells_.end()) continue;
-          for (std::uint32_t m = it->second.begin; m < it->second.end; ++m) f(order_[m]);
-        }
+      for (int j = 0; j < count[1]; ++j) {
+        auto it = columns_.find(key({cand[0][i], cand[1][j]}));
+        if (it == columns_.end()) continue;
+        const Entry* first = entries_.data() + it->second.begin;
+        const Entry* last = entries_.data() + it->second.end;
+        first = std::lower_bound(first, last, z_lo, [](const Entry& e, double z) { return e.x.z() < z; });
+        for (; first != last && first->x.z() <= z_hi; ++first) f(*first);
+      }
   }
 
  private:
-  using Index = std::array<std::int64_t, 3>;
+  using Column = std::array<std::int64_t, 2>;
 
-  // Cell index of p along each axis; off-grid positions give -2 or size + 1 (no grains there, and
-  // no grains in their neighbours either, except the edge cells).
-  Index index(const Vec3& p) const {
-    Index c;
-    for (int a = 0; a < 3; ++a) {
+  // Column of p along x and y; off-grid positions give -2 or size + 1 (empty, as are their
+  // neighbours except the edge columns).
+  Column column(const Vec3& p) const {
+    Column c;
+    for (int a = 0; a < 2; ++a) {
       double v = p[a];
-      if (a < 2 && periodic_[a]) v -= period_[a] * std::floor((v - origin_[a]) / period_[a]);
+      if (periodic_[a]) v -= period_[a] * std::floor((v - origin_[a]) / period_[a]);
       const double t = std::floor((v - origin_[a]) / width_[a]);
       c[a] = t < -1 ? -2 : t > double(size_[a]) ? size_[a] + 1 : std::int64_t(t);
-      if (a < 2 && periodic_[a]) c[a] = std::clamp<std::int64_t>(c[a], 0, size_[a] - 1);
+      if (periodic_[a]) c[a] = std::clamp<std::int64_t>(c[a], 0, size_[a] - 1);
     }
     return c;
   }
 
-  // In-grid neighbours of cell i along one axis, without duplicates when a period holds fewer than
-  // three cells.
+  // In-grid neighbours of column index i along one axis, without duplicates when a period holds
+  // fewer than three columns.
   int neighbours(int axis, std::int64_t i, std::int64_t out[3]) const {
-    const bool periodic = axis < 2 && periodic_[axis];
     const std::int64_t n = size_[axis];
     int count = 0;
     for (std::int64_t d = -1; d <= 1; ++d) {
       std::int64_t j = i + d;
-      if (periodic) j = ((j % n) + n) % n;
+      if (periodic_[axis]) j = ((j % n) + n) % n;
       else if (j < 0 || j >= n) continue;
       bool seen = false;
       for (int k = 0; k < count; ++k) seen = seen || out[k] == j;
@@ -125,16 +143,15 @@ class CellGrid {
     return count;
   }
 
-  static std::uint64_t key(const Index& c) {
-    return (std::uint64_t(c[0]) << 42) | (std::uint64_t(c[1]) << 21) | std::uint64_t(c[2]);
-  }
+  static std::uint64_t key(const Column& c) { return (std::uint64_t(c[0]) << 32) | std::uint64_t(c[1]); }
 
+  double reach_;
   bool periodic_[2] = {false, false};
   double period_[2] = {0, 0};
-  double cell_ = 0, origin_[3] = {0, 0, 0}, width_[3] = {0, 0, 0};
-  std::int64_t size_[3] = {1, 1, 1};
-  std::vector<std::uint32_t> order_;
-  std::unordered_map<std::uint64_t, Range> cells_;
+  double origin_[2] = {0, 0}, width_[2] = {0, 0};
+  std::int64_t size_[2] = {1, 1};
+  std::vector<Entry> entries_;
+  std::unordered_map<std::uint64_t, Range> columns_;
 };
 
 // Does e_z lie in the cone of the unit normals (non-negative forces balance the weight)?
@@ -178,9 +195,18 @@ struct WallContact {
   Vec3 normal;
 };
 
-// Every lateral wall of the container, as seen by a grain at p of radius r.
-std::vector<WallContact> walls_of(const Container& c, int dimension, const Vec3& p, double r) {
-  std::vector<WallContact> w;
+struct Walls {
+  WallContact w[5];
+  int n = 0;
+  void push_back(const WallContact& c) { w[n++] = c; }
+  const WallContact* begin() const { return w; }
+  const WallContact* end() const { return w + n; }
+};
+
+// The floor and every lateral wall of the container, as seen by a grain at p of radius r.
+Walls walls_of(const Container& c, int dimension, const Vec3& p, double r) {
+  Walls w;
+  w.push_back({p.z() - r, Vec3(0, 0, 1)});
   auto pair_of_planes = [&](int axis, double half) {
     Vec3 n = Vec3::Zero();
     n[axis] = -1;
@@ -239,11 +265,18 @@ CheckReport check_packing(const Grains& grains, int dimension, const Container& 
   }
   if (r_max == 0) return rep;
 
-  const bool px = container.kind == ContainerKind::Periodic;
-  const bool py = px && dimension == 3;
+  // A periodic axis without a positive period (an invalid container) is treated as unbounded.
+  const bool periodic = container.kind == ContainerKind::Periodic;
+  const bool px = periodic && std::isfinite(container.size_x) && container.size_x > 0;
+  const bool py = periodic && dimension == 3 && std::isfinite(container.size_y) && container.size_y > 0;
+  auto wrap = [](double& v, double period) {
+    if (std::abs(v) <= 0.5 * period) return;
+    if (std::abs(v) <= 1.5 * period) v -= v > 0 ? period : -period;
+    else v -= period * std::nearbyint(v / period);
+  };
   auto min_image = [&](Vec3 d) {
-    if (px) d.x() -= container.size_x * std::nearbyint(d.x() / container.size_x);
-    if (py) d.y() -= container.size_y * std::nearbyint(d.y() / container.size_y);
+    if (px) wrap(d.x(), container.size_x);
+    if (py) wrap(d.y(), container.size_y);
     return d;
   };
 
@@ -263,35 +296,41 @@ CheckReport check_packing(const Grains& grains, int dimension, const Container& 
     members[level[i]].push_back(std::uint32_t(i));
     level_r[level[i]] = std::max(level_r[level[i]], grains[i].r);
   }
-  std::vector<std::unique_ptr<CellGrid>> grids(kLevels);
+  std::vector<std::unique_ptr<ColumnGrid>> grids(kLevels);
   for (int l = 0; l < kLevels; ++l)
     if (!members[l].empty())
-      grids[l] = std::make_unique<CellGrid>(grains, members[l], dimension, container,
-                                            2 * level_r[l] * (1 + 2 * contact_tol) * (1 + 1e-12));
+      grids[l] = std::make_unique<ColumnGrid>(grains, members[l], dimension, container,
+                                              2 * level_r[l] * (1 + 2 * contact_tol) * (1 + 1e-12));
 
-  // Grain pairs in contact (or overlapping), each once.
+  // Grain pairs in contact (or overlapping), each once. Grains are visited in grid order so that
+  // consecutive searches touch the same memory.
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
   pairs.reserve(4 * n);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!valid[i]) continue;
-    const Grain& gi = grains[i];
-    for (int l = 0; l <= level[i]; ++l) {
-      if (!grids[l]) continue;
-      grids[l]->for_each_near(gi.x, [&](std::uint32_t j) {
-        if (l == level[i] && j <= i) return;
-        const Grain& gj = grains[j];
-        const double dist = min_image(gi.x - gj.x).norm();
-        const double rmin = std::min(gi.r, gj.r);
-        const double gap = dist - (gi.r + gj.r);
-        const double pen = -gap / rmin;
-        rep.max_overlap = std::max(rep.max_overlap, pen);
-        if (pen > overlap_tol) {
-          ++rep.overlaps;
-          note(std::min<std::size_t>(i, j));
-          note(std::max<std::size_t>(i, j));
-        }
-        if (gap < contact_tol * rmin) pairs.emplace_back(std::uint32_t(i), j);
-      });
+  for (int li = 0; li < kLevels; ++li) {
+    if (!grids[li]) continue;
+    for (const Entry& ei : grids[li]->entries()) {
+      const std::uint32_t i = ei.id;
+      for (int l = 0; l <= li; ++l) {
+        if (!grids[l]) continue;
+        const double reach = (ei.r + level_r[l]) * (1 + 2 * contact_tol) * (1 + 1e-12);
+        grids[l]->for_each_near(ei.x, reach, [&](const Entry& ej) {
+          const std::uint32_t j = ej.id;
+          if (l == li && j <= i) return;
+          const double dist = min_image(ei.x - ej.x).norm();
+          const double rmin = std::min(ei.r, ej.r);
+          const double gap = dist - (ei.r + ej.r);
+          const double pen = -gap / rmin;
+          if (pen > rep.max_overlap) rep.max_overlap = pen;
+          if (gap < contact_tol * rmin) {
+            pairs.emplace_back(i, j);
+            if (pen > overlap_tol) {
+              ++rep.overlaps;
+              note(std::min(i, j));
+              note(std::max(i, j));
+            }
+          }
+        });
+      }
     }
   }
   // Partners of every grain, in compressed rows.
@@ -312,9 +351,7 @@ CheckReport check_packing(const Grains& grains, int dimension, const Container& 
 
     // Floor and walls.
     const double floor_gap = gi.x.z() - gi.r;
-    std::vector<WallContact> walls = walls_of(container, dimension, gi.x, gi.r);
-    walls.push_back({floor_gap, Vec3(0, 0, 1)});
-    for (const WallContact& w : walls) {
+    for (const WallContact& w : walls_of(container, dimension, gi.x, gi.r)) {
       const double pen = -w.gap / gi.r;
       rep.max_overlap = std::max(rep.max_overlap, pen);
       if (pen > overlap_tol) {

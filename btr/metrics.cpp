@@ -233,23 +233,65 @@ class Cells {
 
 // ---------------------------------------------------------------- free surface
 
-// Lowest of the column tops (highest grain top per column, columns about two largest diameters wide)
-// over the lateral rectangle [x0, x1] x [y0, y1]; 0 if a column holds no grain.
-double lowest_surface(const Grains& grains, int dimension, double column, double x0, double x1, double y0,
-                      double y1) {
-  const int nx = std::max(1, static_cast<int>(std::ceil((x1 - x0) / column - 1e-9)));
-  const int ny = dimension == 2 ? 1 : std::max(1, static_cast<int>(std::ceil((y1 - y0) / column - 1e-9)));
-  const double wx = (x1 - x0) / nx, wy = dimension == 2 ? 1.0 : (y1 - y0) / ny;
-  std::vector<double> top(std::size_t(nx) * ny, 0.0);
+// The free surface seen from above: the lateral rectangle cut into columns about one largest diameter
+// wide, each with the highest grain top among the grains centred in it (0 if none).
+struct HeightMap {
+  int nx = 1, ny = 1;
+  std::vector<double> ex, ey;  // column edges (2D: ey = {0, 1})
+  std::vector<double> top;     // [j * nx + i]
+};
+
+HeightMap height_map(const Grains& grains, int dimension, double x0, double x1, double y0, double y1, double width,
+                     int max_columns) {
+  HeightMap h;
+  auto edges = [&](double a, double b, int& n, std::vector<double>& e) {
+    n = std::clamp(static_cast<int>(std::ceil((b - a) / width - 1e-9)), 1, max_columns);
+    e.resize(n + 1);
+    for (int k = 0; k <= n; ++k) e[k] = a + (b - a) * k / n;
+  };
+  edges(x0, x1, h.nx, h.ex);
+  if (dimension == 3) edges(y0, y1, h.ny, h.ey);
+  else h.ny = 1, h.ey = {0.0, 1.0};
+  h.top.assign(std::size_t(h.nx) * h.ny, 0.0);
+  const double wx = (x1 - x0) / h.nx, wy = dimension == 3 ? (y1 - y0) / h.ny : 1.0;
   for (const Grain& g : grains) {
     if (g.x.x() < x0 || g.x.x() > x1) continue;
     if (dimension == 3 && (g.x.y() < y0 || g.x.y() > y1)) continue;
-    int i = std::clamp(static_cast<int>((g.x.x() - x0) / wx), 0, nx - 1);
-    int j = dimension == 2 ? 0 : std::clamp(static_cast<int>((g.x.y() - y0) / wy), 0, ny - 1);
-    double& t = top[std::size_t(j) * nx + i];
+    const int i = std::clamp(static_cast<int>((g.x.x() - x0) / wx), 0, h.nx - 1);
+    const int j = dimension == 3 ? std::clamp(static_cast<int>((g.x.y() - y0) / wy), 0, h.ny - 1) : 0;
+    double& t = h.top[std::size_t(j) * h.nx + i];
     t = std::max(t, g.x.z() + g.r);
   }
-  return *std::min_element(top.begin(), top.end());
+  return h;
+}
+
+struct Span {
+  double extent = 0.0, height = 0.0;  // (edge[last + 1] - edge[first]) and the least height over it
+  int first = 0, last = -1;
+};
+
+// Largest rectangle under a histogram of columns with the given edges (heights <= 0 never count).
+Span largest_rectangle(const std::vector<double>& height, const std::vector<double>& edge) {
+  const int n = static_cast<int>(height.size());
+  std::vector<int> left(n), right(n), stack;
+  for (int j = 0; j < n; ++j) {
+    while (!stack.empty() && height[stack.back()] >= height[j]) stack.pop_back();
+    left[j] = stack.empty() ? 0 : stack.back() + 1;
+    stack.push_back(j);
+  }
+  stack.clear();
+  for (int j = n - 1; j >= 0; --j) {
+    while (!stack.empty() && height[stack.back()] >= height[j]) stack.pop_back();
+    right[j] = stack.empty() ? n - 1 : stack.back() - 1;
+    stack.push_back(j);
+  }
+  Span best;
+  for (int j = 0; j < n; ++j) {
+    if (!(height[j] > 0.0)) continue;
+    const double extent = edge[right[j] + 1] - edge[left[j]];
+    if (extent * height[j] > best.extent * best.height) best = {extent, height[j], left[j], right[j]};
+  }
+  return best;
 }
 
 double fill_fraction(const Grains& grains, int dimension, const BulkMeasures& m) {
@@ -326,13 +368,12 @@ BulkMeasures bulk_measures(const Grains& grains, int dimension, const Container&
   }
   const double d = 2.0 * max_radius(grains);
   const double margin = options.margin_diameters * d;
-  const double column = 2.0 * d;
   const bool three = dimension == 3;
 
   if (container.kind == ContainerKind::Periodic) {
     const double lx = container.size_x, ly = three ? container.size_y : 0.0;
-    const double surface =
-        lowest_surface(grains, dimension, column, -0.5 * lx, 0.5 * lx, -0.5 * ly, 0.5 * ly);
+    const HeightMap h = height_map(grains, dimension, -0.5 * lx, 0.5 * lx, -0.5 * ly, 0.5 * ly, d, 1 << 20);
+    const double surface = *std::min_element(h.top.begin(), h.top.end());
     m.slab = true;
     m.window.lo = Vec3(-0.5 * lx, -0.5 * ly, margin);
     m.window.hi = Vec3(0.5 * lx, 0.5 * ly, surface - margin);
@@ -377,24 +418,26 @@ BulkMeasures bulk_measures(const Grains& grains, int dimension, const Container&
       m.note = "container too narrow for a bulk window";
       return m;
     }
-    double cx = options.has_centre ? std::clamp(options.centre_x, bx0, bx1) : 0.5 * (bx0 + bx1);
-    double cy = options.has_centre ? std::clamp(options.centre_y, by0, by1) : 0.5 * (by0 + by1);
-    if (!three) cy = 0.0;
-    // Shrink the window about the centre and keep the largest volume that fits under the surface.
-    constexpr int kSteps = 40;
+    // The column-aligned box of largest volume whose top stays `margin` below every column top.
+    const int cap = three ? 200 : 2000;  // columns per side; wider columns beyond that keep the search cheap
+    const HeightMap h = height_map(grains, dimension, bx0, bx1, by0, by1, d, cap);
     double best = 0.0;
-    for (int k = kSteps; k >= 1; --k) {
-      const double f = double(k) / kSteps;
-      const double x0 = cx - f * (cx - bx0), x1 = cx + f * (bx1 - cx);
-      const double y0 = cy - f * (cy - by0), y1 = cy + f * (by1 - cy);
-      if (x1 - x0 < d || (three && y1 - y0 < d)) break;
-      const double top = lowest_surface(grains, dimension, column, x0, x1, y0, y1) - margin;
-      const double vol = (x1 - x0) * (three ? y1 - y0 : 1.0) * (top - margin);
-      if (top > margin && vol > best) {
-        best = vol;
-        m.window.lo = Vec3(x0, y0, margin);
-        m.window.hi = Vec3(x1, y1, top);
-        m.window_volume = vol;
+    std::vector<double> least(h.ny), avail(h.ny);
+    for (int i0 = 0; i0 < h.nx; ++i0) {
+      std::fill(least.begin(), least.end(), std::numeric_limits<double>::max());
+      for (int i1 = i0; i1 < h.nx; ++i1) {
+        for (int j = 0; j < h.ny; ++j) {
+          least[j] = std::min(least[j], h.top[std::size_t(j) * h.nx + i1]);
+          avail[j] = least[j] - 2.0 * margin;  // window from z = margin to (column top - margin)
+        }
+        const Span span = largest_rectangle(avail, h.ey);
+        const double vol = (h.ex[i1 + 1] - h.ex[i0]) * span.extent * span.height;
+        if (vol > best) {
+          best = vol;
+          m.window.lo = Vec3(h.ex[i0], three ? h.ey[span.first] : 0.0, margin);
+          m.window.hi = Vec3(h.ex[i1 + 1], three ? h.ey[span.last + 1] : 0.0, margin + span.height);
+          m.window_volume = three ? vol : (h.ex[i1 + 1] - h.ex[i0]) * span.height;
+        }
       }
     }
     if (best <= 0.0) {

@@ -19,10 +19,6 @@ struct Box {
 struct MetricsOptions {
   double margin_diameters = 3.0;  // the bulk window keeps this many largest diameters from floor, walls, surface
   double contact_tol = 1e-7;      // a contact: gap < contact_tol * smaller radius (overlaps count too)
-  // Box windows (every container but periodic) shrink about this lateral point until they fit under
-  // the free surface; a heap passes its source. Default: the middle of the lateral bounds.
-  bool has_centre = false;
-  double centre_x = 0.0, centre_y = 0.0;
 };
 
 struct BulkMeasures {
@@ -60,6 +56,13 @@ double grain_volume_in_slab(const Grain& g, int dimension, double z_lo, double z
 // Solid fraction of a box (no periodic images).
 double packing_fraction_in_box(const Grains& grains, int dimension, const Box& box);
 
+// The bulk window keeps `margin` = margin_diameters largest diameters from the floor, the walls and the
+// free surface. The free surface is sampled in columns one largest diameter wide (highest grain top of
+// the grains centred in each column). Periodic beds: a z-slab over the whole footprint, up to the lowest
+// column top less the margin; volumes of cut grains are exact caps / segments. Other containers: the
+// lateral bounds are the walls less the margin (cylinder: the inscribed square; Hele-Shaw: the whole gap
+// in y; open floor: the extent of the grains less the margin), and the window is the column-aligned box
+// of largest volume under (column top - margin), so heaps get a box under their slopes.
 // `coordination` (optional): coordination_numbers() already computed with options.contact_tol.
 BulkMeasures bulk_measures(const Grains& grains, int dimension, const Container& container,
                            const MetricsOptions& options = {}, const std::vector<int>* coordination = nullptr);

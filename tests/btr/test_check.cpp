@@ -281,6 +281,34 @@ TEST(Check, GrainHeldByABoxWallAndAGrain2D) {
   EXPECT_EQ(check_packing(g, 2, open()).unsupported, 1);
 }
 
+TEST(Check, ExtremeSizeRatioContactsAreFound) {
+  // A grain 100 times smaller resting on top of a big one, and another one sunk into its side.
+  const double R = 1.0, r = 0.01;
+  Grains g = {grain(0, 0, R, R), grain(0, 0, 2 * R + r, r)};
+  EXPECT_TRUE(check_packing(g, 3, open()).ok());
+  g[1].x.z() += 1e-3 * r;  // no longer touching: unsupported
+  EXPECT_EQ(check_packing(g, 3, open()).unsupported, 1);
+  g.push_back(grain(R + 0.5 * r, 0, R, r));  // centre 0.5 r outside the big sphere's surface
+  const CheckReport rep = check_packing(g, 3, open());
+  EXPECT_EQ(rep.overlaps, 1);
+  EXPECT_NEAR(rep.max_overlap, 0.5, 1e-9);
+}
+
+TEST(Check, GrainsFarApartAreHandled) {
+  // Coordinates spanning 2e9 radii: the grid must neither overflow nor miss the close pair.
+  Grains g = {grain(-1e9, 0, 1, 1), grain(1e9, 5, 1, 1), grain(1e9 + 1.5, 5, 1, 1)};
+  const CheckReport rep = check_packing(g, 3, open());
+  EXPECT_EQ(rep.overlaps, 1);
+  EXPECT_EQ(rep.unsupported, 0);
+}
+
+TEST(Check, NonFiniteOrEmptyGrainsAreOutside) {
+  Grains g = {grain(0, 0, 1, 1), grain(NAN, 0, 1, 1), grain(5, 0, 1, 0)};
+  const CheckReport rep = check_packing(g, 3, open());
+  EXPECT_EQ(rep.outside, 2);
+  EXPECT_EQ(rep.overlaps, 0);
+}
+
 TEST(Check, LargeCubicStackIsFastAndOk) {
   // A simple cubic stack (each sphere on the one below) of 64^3 grains, shuffled, plus one broken
   // grain: the check must find exactly that one and run in well under a few seconds.

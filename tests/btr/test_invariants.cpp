@@ -135,7 +135,9 @@ TEST_P(Invariants, PackingIsValidAndBreakingItIsCaught) {
   for (std::size_t i = 0; i < g.size(); ++i) {
     ASSERT_EQ(g[i].r, drops[i].r) << "grain " << i + 1;
     ASSERT_EQ(g[i].species, drops[i].species) << "grain " << i + 1;
-    if (c.dim == 2) ASSERT_EQ(g[i].x.y(), 0.0) << "grain " << i + 1;
+    if (c.dim == 2) {
+      ASSERT_EQ(g[i].x.y(), 0.0) << "grain " << i + 1;
+    }
   }
 
   const CheckReport rep = check_packing(g, c.dim, k, 1e-9, 1e-7);
