@@ -70,6 +70,7 @@ std::string check_message(const btr::CheckReport& c) {
 }
 
 int run(const Options& o, const CLI::App& cmd) {
+  const auto t_start = std::chrono::steady_clock::now();
   btr::Scene scene;
   try {
     scene = btr::load_scene(o.scene);
@@ -102,7 +103,9 @@ int run(const Options& o, const CLI::App& cmd) {
     std::cerr << "btr deposit: " << e.what() << "\n";
     return kInternalFailure;
   }
-  const btr::Grains& grains = result.grains;
+  btr::Packing packing;
+  packing.grains = std::move(result.grains);
+  const btr::Grains& grains = packing.grains;
   const std::int64_t n = static_cast<std::int64_t>(grains.size());
 
   // ---- self-check
@@ -123,7 +126,6 @@ int run(const Options& o, const CLI::App& cmd) {
   const std::vector<int> coordination = btr::coordination_numbers(grains, scene.dimension, scene.container);
   btr::MetricsOptions mo;
   const bool point = scene.source.kind == btr::SourceSpec::Kind::Point;
-  if (point) mo.has_centre = true, mo.centre_x = scene.source.x, mo.centre_y = scene.source.y;
   const btr::BulkMeasures bulk = btr::bulk_measures(grains, scene.dimension, scene.container, mo, &coordination);
   btr::HeapMeasures heap;
   if (point) heap = btr::heap_measures(grains, scene.dimension, scene.source.x, scene.source.y);
@@ -140,7 +142,6 @@ int run(const Options& o, const CLI::App& cmd) {
   for (const auto& [species, k] : per_species) counts[std::to_string(species)] = k;
   const json scene_json = btr::scene_to_json(scene);
 
-  btr::Packing packing;
   packing.meta = {
       {"program", "btr"},
       {"version", BTR_VERSION},
@@ -160,7 +161,6 @@ int run(const Options& o, const CLI::App& cmd) {
       {"check", check_json},
       {"metrics", {{"bulk", bulk_to_json(bulk)}, {"heap", point ? heap_to_json(heap, scene.dimension) : json(nullptr)}}},
   };
-  packing.grains = grains;
   double write_seconds = 0.0;
   try {
     auto t = std::chrono::steady_clock::now();
@@ -196,7 +196,8 @@ int run(const Options& o, const CLI::App& cmd) {
     }
     if (o.check)
       std::printf("  check: %s in %.3f s\n", report.ok() ? "ok" : "FAILED", check_seconds);
-    std::printf("  wrote %s/%s.csv, .json, .vtp in %.3f s\n", o.out.c_str(), name.c_str(), write_seconds);
+    std::printf("  wrote %s/%s.csv, .json, .vtp in %.3f s; %.3f s in all\n", o.out.c_str(), name.c_str(),
+                write_seconds, seconds_since(t_start));
   }
   if (o.check && !report.ok()) {
     std::cerr << "btr deposit: check failed: " << check_message(report) << "\n";

@@ -15,6 +15,7 @@ Runner add_relax_command(CLI::App& app) {
     std::string packing, engine, out;
     btr::RelaxSettings settings;
     double timestep = 0.0;
+    double max_time = 0.0;
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand("relax", "Relax a packing in LIGGGHTS or YADE and read the result back");
@@ -30,6 +31,8 @@ Runner add_relax_command(CLI::App& app) {
       ->required();
   cmd->add_option("--timestep", o->timestep, "time step [s]; refused if above the stable one")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--max-time", o->max_time, "simulated time limit [s] (default: the scene's relax.max_time)")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--max-overlap", o->settings.max_overlap,
                   "refuse packings whose largest overlap / smaller radius exceeds this")
       ->capture_default_str()
@@ -42,6 +45,7 @@ Runner add_relax_command(CLI::App& app) {
     try {
       PackingWithScene p = load_packing_with_scene(o->packing);
       if (cmd->count("--timestep")) o->settings.timestep = o->timestep;
+      if (cmd->count("--max-time")) p.scene.relax.max_time = o->max_time;
       const std::string engine = o->engine.empty() ? p.scene.relax.engine : o->engine;
       const btr::RelaxResult r = btr::relax(p.packing, p.scene, engine, o->settings, o->out);
       std::cout << engine << ": stopped by " << r.stop_reason << " at t = " << r.simulated_time << " s after "

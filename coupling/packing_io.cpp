@@ -50,7 +50,8 @@ double parse_double(std::string_view field, const std::string& file, std::int64_
   char* end = nullptr;
   errno = 0;
   double v = std::strtod(begin, &end);
-  if (text.empty() || end != begin + text.size() || errno == ERANGE || !std::isfinite(v))
+  // errno == ERANGE on underflow is fine: %.17g of a subnormal reads back exactly.
+  if (text.empty() || end != begin + text.size() || !std::isfinite(v))
     csv_error(file, line, std::string("column '") + kColumns[col] + "': expected a finite number, got " +
                               excerpt(field));
   return v;

@@ -23,7 +23,9 @@ struct PointData {
 // Throws std::runtime_error naming the file, the line and what was expected.
 Packing read_packing(const std::string& csv_path);
 
-// Writes DIR/NAME.csv, DIR/NAME.json and DIR/NAME.vtp, each to a temporary name then renamed.
+// Writes DIR/NAME.csv, DIR/NAME.json and DIR/NAME.vtp (creating DIR if missing): all three go to
+// temporary names in DIR first and are renamed only when all were written, so a failure leaves any
+// previous packing of that name as it was. `extra` becomes VTK point data (one value per grain).
 void write_packing(const std::string& dir, const std::string& name, const Packing& packing,
                    const std::vector<PointData>& extra = {});
 

@@ -1,0 +1,130 @@
+// `btr deposit` and `btr bench` as a user runs them: files, metadata, determinism, exit codes.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "coupling/packing_io.h"
+#include "coupling/scene_json.h"
+
+namespace btr {
+namespace {
+namespace fs = std::filesystem;
+
+struct CliRun {
+  int code = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+const fs::path& scratch() {
+  static const fs::path d = [] {
+    fs::path p = fs::temp_directory_path() / ("btr_deposit_cli_" + std::to_string(::getpid()));
+    fs::remove_all(p);
+    fs::create_directories(p);
+    return p;
+  }();
+  return d;
+}
+
+CliRun btr(const std::string& args) {
+  const fs::path out = scratch() / "stdout.txt", err = scratch() / "stderr.txt";
+  const std::string cmd = std::string(BTR_BINARY) + " " + args + " >" + out.string() + " 2>" + err.string();
+  CliRun r;
+  const int status = std::system(cmd.c_str());
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+const std::string kHeap = std::string(BTR_SOURCE_DIR) + "/inputs/heap2d.toml";
+
+TEST(DepositCli, WritesThePackingWithItsMetadata) {
+  const fs::path dir = scratch() / "a" / "b";  // created if missing
+  const CliRun r = btr("deposit " + kHeap + " -o " + dir.string() + " --count 400 --seed 7 --check");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("heap2d: 400 grains"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("angle of repose"), std::string::npos) << r.out;
+  const Packing p = read_packing((dir / "heap2d.csv").string());
+  ASSERT_EQ(p.grains.size(), 400u);
+  EXPECT_TRUE(fs::exists(dir / "heap2d.vtp"));
+  for (const Grain& g : p.grains) EXPECT_EQ(g.x.y(), 0.0);  // 2D: the x-z plane
+  const nlohmann::json& m = p.meta;
+  EXPECT_EQ(m["scene_name"], "heap2d");
+  EXPECT_EQ(m["scene_file"], kHeap);
+  EXPECT_EQ(m["seed"], 7);
+  EXPECT_EQ(m["dimension"], 2);
+  EXPECT_EQ(m["count"], 400);
+  EXPECT_EQ(m["counts"]["1"], 400);
+  EXPECT_EQ(m["container"]["kind"], "open");
+  EXPECT_FALSE(m["version"].get<std::string>().empty());
+  for (const char* stage : {"deposition", "check", "writing"}) EXPECT_GT(m["timings"][stage].get<double>(), 0.0) << stage;
+  EXPECT_EQ(m["check"]["ok"], true);
+  EXPECT_TRUE(m["metrics"]["heap"]["valid"].get<bool>());
+  // the stored scene rebuilds this run: it carries the seed and count actually used
+  const Scene s = scene_from_json(m["scene"], "meta");
+  EXPECT_EQ(s.seed, 7u);
+  EXPECT_EQ(s.grains.count, 400);
+  EXPECT_EQ(s.dimension, 2);
+}
+
+TEST(DepositCli, SameSeedSameBytesOtherSeedOtherPacking) {
+  const fs::path dir = scratch() / "det";
+  ASSERT_EQ(btr("deposit " + kHeap + " -o " + dir.string() + " --count 300 --name one -q").code, 0);
+  ASSERT_EQ(btr("deposit " + kHeap + " -o " + dir.string() + " --count 300 --name two -q").code, 0);
+  ASSERT_EQ(btr("deposit " + kHeap + " -o " + dir.string() + " --count 300 --name three --seed 99 -q").code, 0);
+  EXPECT_EQ(slurp(dir / "one.csv"), slurp(dir / "two.csv"));
+  EXPECT_NE(slurp(dir / "one.csv"), slurp(dir / "three.csv"));
+}
+
+TEST(DepositCli, QuietPrintsNothing) {
+  const CliRun r = btr("deposit " + kHeap + " -o " + (scratch() / "q").string() + " --count 50 --quiet");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.out, "");
+  EXPECT_EQ(r.err, "");
+}
+
+TEST(DepositCli, ExitCodes) {
+  // bad scene file: 2, and the message names the file
+  const fs::path bad = scratch() / "bad.toml";
+  {
+    std::ofstream f(bad);
+    f << slurp(kHeap) << "\n[typo]\nx = 1\n";
+  }
+  CliRun r = btr("deposit " + bad.string() + " -o " + (scratch() / "x").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find(bad.string()), std::string::npos) << r.err;
+  // bad options: 2
+  EXPECT_EQ(btr("deposit " + kHeap + " -o " + (scratch() / "x").string() + " --count 0").code, 2);
+  EXPECT_EQ(btr("deposit " + kHeap).code, 2);                   // no -o
+  EXPECT_EQ(btr("deposit /no/such/scene.toml -o x").code, 2);
+  // the output folder cannot be created (a file is in the way): 3
+  const fs::path file = scratch() / "plain_file";
+  std::ofstream(file) << "x";
+  r = btr("deposit " + kHeap + " -o " + (file / "sub").string() + " --count 20");
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find("plain_file"), std::string::npos) << r.err;
+}
+
+TEST(BenchCli, PrintsATableAndTheExponent) {
+  const CliRun r = btr("bench --sizes 200,400 --scenes heap2d");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("heap2d          200"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("heap2d          400"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("exponent"), std::string::npos) << r.out;
+  EXPECT_EQ(btr("bench --sizes 2.5").code, 2);
+}
+
+}  // namespace
+}  // namespace btr

@@ -1,0 +1,219 @@
+// Packing files: exact CSV round trip, clear errors, temporary-then-rename writes, a VTP VTK can read.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <random>
+#include <sstream>
+
+#include <vtkDataArray.h>
+#include <vtkNew.h>
+#include <vtkObject.h>
+#include <vtkPointData.h>
+#include <vtkPolyData.h>
+#include <vtkXMLPolyDataReader.h>
+
+#include "coupling/packing_io.h"
+
+namespace btr {
+namespace {
+namespace fs = std::filesystem;
+
+fs::path fresh_dir(const std::string& tag) {
+  fs::path d = fs::temp_directory_path() / ("btr_packing_io_" + tag + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  return d;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void spit(const fs::path& p, const std::string& text) {
+  std::ofstream out(p, std::ios::binary);
+  out << text;
+}
+
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+// Grains whose coordinates need all 17 digits, plus awkward values (negative zero, tiny, huge).
+Packing awkward_packing(std::size_t n) {
+  std::mt19937_64 rng(42);
+  auto u = [&] { return double(rng() >> 11) * 0x1.0p-53; };
+  Packing p;
+  for (std::size_t i = 0; i < n; ++i) {
+    Grain g;
+    g.x = Vec3(u() * 0.1 - 0.05, (u() - 0.5) * 1e-7, u() / 3.0);
+    g.r = 1e-3 * (0.5 + u());
+    g.species = 1 + static_cast<int>(rng() % 3);
+    p.grains.push_back(g);
+  }
+  p.grains[0].x = Vec3(-0.0, 1e-300, 1.0 / 3.0);
+  p.grains[1].x = Vec3(std::nextafter(0.1, 1.0), -1e300, 5e-324);
+  p.grains[2].r = std::numeric_limits<double>::min();
+  p.meta = {{"scene_name", "awkward"}, {"seed", 18446744073709551615ull}, {"x", 0.1 + 0.2}};
+  return p;
+}
+
+TEST(PackingIO, RoundTripIsExactToTheBit) {
+  const fs::path dir = fresh_dir("roundtrip") / "nested" / "out";  // created by write_packing
+  const Packing p = awkward_packing(500);
+  write_packing(dir.string(), "pack", p);
+  const Packing q = read_packing((dir / "pack.csv").string());
+  ASSERT_EQ(q.grains.size(), p.grains.size());
+  for (std::size_t i = 0; i < p.grains.size(); ++i) {
+    for (int k = 0; k < 3; ++k) EXPECT_TRUE(same_bits(p.grains[i].x[k], q.grains[i].x[k])) << i << " " << k;
+    EXPECT_TRUE(same_bits(p.grains[i].r, q.grains[i].r)) << i;
+    EXPECT_EQ(p.grains[i].species, q.grains[i].species) << i;
+  }
+  EXPECT_EQ(q.meta, p.meta);
+  EXPECT_TRUE(same_bits(q.meta["x"].get<double>(), 0.1 + 0.2));
+  // writing what was read gives the same bytes
+  write_packing(dir.string(), "again", q);
+  EXPECT_EQ(slurp(dir / "pack.csv"), slurp(dir / "again.csv"));
+  // the CSV is what the format says: header, then id 1..N
+  std::istringstream csv(slurp(dir / "pack.csv"));
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "id,x,y,z,radius,species");
+  std::getline(csv, line);
+  EXPECT_EQ(line.substr(0, 5), "1,-0,");
+  fs::remove_all(fresh_dir("roundtrip"));
+}
+
+TEST(PackingIO, OnlyTheThreeFilesAreLeft) {
+  const fs::path dir = fresh_dir("files");
+  write_packing(dir.string(), "p", awkward_packing(20));
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"p.csv", "p.json", "p.vtp"}));
+  fs::remove_all(dir);
+}
+
+TEST(PackingIO, AFailedWriteKeepsThePreviousPackingAndLeavesNoTemporaryFile) {
+  const fs::path dir = fresh_dir("fail");
+  const Packing old = awkward_packing(30);
+  write_packing(dir.string(), "p", old);
+  const std::string csv = slurp(dir / "p.csv"), json = slurp(dir / "p.json"), vtp = slurp(dir / "p.vtp");
+
+  // Block the VTP's temporary name with a folder: the CSV's temporary file is written first, then the
+  // VTP cannot be created.
+  const fs::path blocker = dir / ("p.vtp.tmp." + std::to_string(::getpid()));
+  fs::create_directory(blocker);
+  fs::create_directory(blocker / "x");
+  vtkObject::GlobalWarningDisplayOff();
+  EXPECT_THROW(write_packing(dir.string(), "p", awkward_packing(40)), std::runtime_error);
+  vtkObject::GlobalWarningDisplayOn();
+  EXPECT_EQ(slurp(dir / "p.csv"), csv);
+  EXPECT_EQ(slurp(dir / "p.json"), json);
+  EXPECT_EQ(slurp(dir / "p.vtp"), vtp);
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    if (e.path() != blocker) EXPECT_EQ(name.find(".tmp"), std::string::npos) << name;
+  }
+
+  // Point data of the wrong length is refused before anything is written.
+  fs::remove_all(blocker);
+  EXPECT_THROW(write_packing(dir.string(), "p", awkward_packing(40), {{"bad", std::vector<double>(39)}}),
+               std::runtime_error);
+  EXPECT_EQ(slurp(dir / "p.csv"), csv);
+  fs::remove_all(dir);
+}
+
+TEST(PackingIO, VtpHasPointsVerticesAndArrays) {
+  const fs::path dir = fresh_dir("vtp");
+  const Packing p = awkward_packing(123);
+  std::vector<double> extra(p.grains.size());
+  for (std::size_t i = 0; i < extra.size(); ++i) extra[i] = 0.5 * double(i);
+  write_packing(dir.string(), "p", p, {{"displacement", extra}});
+
+  vtkNew<vtkXMLPolyDataReader> reader;
+  reader->SetFileName((dir / "p.vtp").c_str());
+  reader->Update();
+  vtkPolyData* poly = reader->GetOutput();
+  ASSERT_EQ(poly->GetNumberOfPoints(), 123);
+  EXPECT_EQ(poly->GetNumberOfVerts(), 123);  // ParaView shows the points without a glyph
+  vtkPointData* pd = poly->GetPointData();
+  vtkDataArray* radius = pd->GetArray("radius");
+  vtkDataArray* id = pd->GetArray("id");
+  vtkDataArray* species = pd->GetArray("species");
+  vtkDataArray* disp = pd->GetArray("displacement");
+  ASSERT_TRUE(radius && id && species && disp);
+  for (vtkIdType i = 0; i < 123; ++i) {
+    const Grain& g = p.grains[static_cast<std::size_t>(i)];
+    double x[3];
+    poly->GetPoint(i, x);
+    for (int k = 0; k < 3; ++k) EXPECT_TRUE(same_bits(x[k], g.x[k])) << i;
+    EXPECT_TRUE(same_bits(radius->GetTuple1(i), g.r)) << i;
+    EXPECT_EQ(id->GetTuple1(i), double(i + 1));
+    EXPECT_EQ(species->GetTuple1(i), double(g.species));
+    EXPECT_EQ(disp->GetTuple1(i), 0.5 * double(i));
+  }
+  fs::remove_all(dir);
+}
+
+// ------------------------------------------------------------ bad CSV
+
+std::string read_error(const fs::path& file) {
+  try {
+    read_packing(file.string());
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+TEST(PackingIO, BadCsvErrorsNameFileLineAndWhatWasExpected) {
+  const fs::path dir = fresh_dir("bad");
+  fs::create_directories(dir);
+  const std::string head = "id,x,y,z,radius,species\n";
+  const std::string good = "1,0,0,0.001,0.001,1\n";
+  struct Case {
+    std::string text, needle;
+    int line;
+  } cases[] = {
+      {"id,x,y,z,r,species\n" + good, "expected the header 'id,x,y,z,radius,species'", 1},
+      {head + good + "3,0,0,0.003,0.001,1\n", "column 'id': expected 2", 3},
+      {head + good + "2,0,0,abc,0.001,1\n", "column 'z': expected a finite number, got 'abc'", 3},
+      {head + good + "2,0,0,0.1,0.001\n", "expected 6 columns", 3},
+      {head + good + "2,0,0,0.1,0.001,1,7\n", "expected 6 columns", 3},
+      {head + "1,0,0,0.001,-0.001,1\n", "column 'radius': expected a positive number", 2},
+      {head + "1,0,0,0.001,0.001,0\n", "column 'species': expected an integer >= 1", 2},
+      {head + "1,0,0,0.001,0.001,1.5\n", "column 'species': expected an integer", 2},
+      {head + "1,0,0,nan,0.001,1\n", "column 'z': expected a finite number", 2},
+      {head + good + "\n2,0,0,0.1,0.001,1\n", "blank line", 3},
+      {"", "the file is empty", 1},
+  };
+  int k = 0;
+  for (const Case& c : cases) {
+    const fs::path f = dir / ("bad" + std::to_string(k++) + ".csv");
+    spit(f, c.text);
+    const std::string msg = read_error(f);
+    EXPECT_NE(msg.find(f.string() + ":" + std::to_string(c.line) + ":"), std::string::npos) << msg;
+    EXPECT_NE(msg.find(c.needle), std::string::npos) << msg;
+  }
+  // trailing blank lines and Windows line ends are fine
+  spit(dir / "ok.csv", "id,x,y,z,radius,species\r\n1,0,0,0.001,0.001,2\r\n\n\n");
+  const Packing ok = read_packing((dir / "ok.csv").string());
+  ASSERT_EQ(ok.grains.size(), 1u);
+  EXPECT_EQ(ok.grains[0].species, 2);
+  EXPECT_TRUE(ok.meta.is_object() && ok.meta.empty());
+  // a broken NAME.json beside it is named in the error
+  spit(dir / "ok.json", "{\"seed\": ");
+  const std::string msg = read_error(dir / "ok.csv");
+  EXPECT_NE(msg.find((dir / "ok.json").string()), std::string::npos) << msg;
+  EXPECT_NE(read_error(dir / "missing.csv").find("missing.csv"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace btr
