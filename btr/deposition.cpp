@@ -487,6 +487,11 @@ Deposition::Deposition(int dimension, const Container& container, double r_max, 
 Deposition::~Deposition() = default;
 const Grain& Deposition::place(const Drop& drop) { return impl_->place(drop); }
 const Grains& Deposition::grains() const { return impl_->grains; }
+Grains Deposition::release() {
+  Grains out = std::move(impl_->grains);
+  impl_ = std::make_unique<Impl>(impl_->dimension, impl_->container, impl_->r_max, impl_->max_events);
+  return out;
+}
 int Deposition::dimension() const { return impl_->dimension; }
 const Container& Deposition::container() const { return impl_->container; }
 

@@ -41,6 +41,8 @@ class Deposition {
   const Grain& place(const Drop& drop);
 
   const Grains& grains() const;
+  // Hands the placed grains over (the engine is empty afterwards); saves a copy of a large packing.
+  Grains release();
   int dimension() const;
   const Container& container() const;
 

@@ -25,7 +25,7 @@ RunResult run_scene(const Scene& scene, std::uint64_t seed, std::int64_t count,
   }
   if (progress) progress(total, total);
   RunResult result;
-  result.grains = deposition.grains();
+  result.grains = deposition.release();
   result.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
