@@ -92,14 +92,13 @@ LiggghtsLog parse_liggghts_log(const std::string& path) {
   while (std::getline(in, line)) {
     auto w = split(line);
     if (w.empty()) { in_thermo = false; continue; }
+    // The script's thermo_style is "step time v_btr_ekin f_btr_kmean"; LIGGGHTS prints the header
+    // with shortened names ("Step Time btr_ekin btr_kmea"), so the columns are taken by position.
     if (w[0] == "Step") {
-      in_thermo = true;
+      in_thermo = w.size() == 4 && w[1] == "Time";
       n_cols = w.size();
-      col_time = col_ke = -1;
-      for (std::size_t i = 0; i < w.size(); ++i) {
-        if (w[i] == "Time") col_time = static_cast<int>(i);
-        if (w[i] == "v_btr_ekin") col_ke = static_cast<int>(i);
-      }
+      col_time = 1;
+      col_ke = 2;
       continue;
     }
     if (line.rfind("BTR-STOP ", 0) == 0) {

@@ -98,8 +98,7 @@ std::string OverlapReport::describe() const {
   if (count == 0) return "no overlap";
   std::string who = id_b == 0 ? "grain " + std::to_string(id_a) + " and the " + wall + " wall"
                               : "grains " + std::to_string(id_a) + " and " + std::to_string(id_b);
-  return fmt(largest) + " of the smaller radius (" + fmt(depth) + " m) between " + who + "; " +
-         std::to_string(count) + " overlapping contact(s) in all";
+  return fmt(largest) + " of the smaller radius (" + fmt(depth) + " m) between " + who;
 }
 
 void for_each_overlap(const Grains& grains, int dimension, const Container& container,

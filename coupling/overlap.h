@@ -19,7 +19,7 @@ struct OverlapReport {
   std::int64_t id_b = 0;
   std::string wall;            // the wall's name when id_b == 0
   std::int64_t count = 0;      // contacts with a positive overlap
-  std::string describe() const;  // e.g. "0.031 of the smaller radius (1.5e-05 m) between grains 4 and 17"
+  std::string describe() const;  // "0.031 of the smaller radius (1.5e-05 m) between grains 4 and 17"
 };
 
 // Calls f(id_a, id_b, depth, wall) for every overlapping contact (depth > 0); wall is null for a grain

@@ -122,8 +122,10 @@ RelaxPlan make_plan(const Packing& packing, const Scene& scene, const RelaxSetti
   if (!(settings.max_overlap >= 0.0)) throw RelaxRefused("max_overlap must be >= 0, got " + g6(settings.max_overlap));
   const OverlapReport overlap = largest_overlap(packing.grains, scene.dimension, scene.container);
   if (overlap.largest > settings.max_overlap)
-    throw RelaxRefused("packing refused: largest initial overlap " + overlap.describe() + " exceeds the limit " +
-                       g6(settings.max_overlap) + " of the smaller radius");
+    throw RelaxRefused("packing refused: its largest overlap, " + overlap.describe() + ", exceeds the limit " +
+                       g6(settings.max_overlap) + " (" + std::to_string(overlap.count) +
+                       " overlapping contacts in all); BTR contacts touch exactly, so this packing was changed "
+                       "or is not a BTR packing");
   plan.largest_overlap = overlap.largest;
   plan.max_time = scene.relax.max_time;
   plan.kinetic_threshold = kinetic_threshold(packing.grains, scene);
@@ -215,8 +217,16 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
     displacement.values[i] = d.norm();
   }
   const OverlapReport final_overlap = largest_overlap(out, scene.dimension, c);
-  nlohmann::json meta = packing.meta.is_object() ? packing.meta : nlohmann::json::object();
-  meta["relax"] = {
+  // The adapter's metadata (the input's, plus anything engine-specific under "relax") is kept; the
+  // common fields are set here, the same for every engine.
+  nlohmann::json meta = res.relaxed.meta.is_object() ? res.relaxed.meta
+                        : packing.meta.is_object()    ? packing.meta
+                                                      : nlohmann::json::object();
+  nlohmann::json info = nlohmann::json::object();
+  const bool inherited = packing.meta.is_object() && packing.meta.contains("relax") && meta.contains("relax") &&
+                         packing.meta["relax"] == meta["relax"];  // from relaxing this packing before
+  if (meta.contains("relax") && meta["relax"].is_object() && !inherited) info = meta["relax"];
+  info.update({
       {"engine", engine},
       {"model", scene.relax.model},
       {"np", settings.np},
@@ -231,7 +241,8 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
       {"initial_largest_overlap", plan.largest_overlap},
       {"final_largest_overlap", final_overlap.largest},
       {"contacts", res.contacts.size()},
-  };
+  });
+  meta["relax"] = info;
   res.relaxed.meta = meta;
   write_packing(dir, "relaxed", res.relaxed, {displacement});
 

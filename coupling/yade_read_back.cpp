@@ -1,0 +1,183 @@
+// Reads what relax_yade.py wrote into a run folder and turns it into a RelaxResult, or an EngineFailure
+// when the run failed: no or failed status, missing or malformed outputs, NaN, lost grains, grains outside
+// the container, a stop reason the outputs contradict.
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <deque>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "coupling/dem_walls.h"
+#include "coupling/yade_script.h"
+
+namespace btr {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string log_tail(const fs::path& log, std::size_t count = 20) {
+  std::ifstream f(log);
+  if (!f) return "(no log file " + log.string() + ")";
+  std::deque<std::string> last;
+  std::string line;
+  while (std::getline(f, line)) {
+    last.push_back(line);
+    if (last.size() > count) last.pop_front();
+  }
+  std::string out;
+  for (const auto& l : last) out += l + "\n";
+  return out;
+}
+
+class Reader {
+ public:
+  explicit Reader(std::string dir) : dir_(std::move(dir)) {}
+
+  [[noreturn]] void fail(const std::string& what) const {
+    throw EngineFailure("YADE run in " + dir_ + " failed: " + what + "\n--- last lines of " + yade_files::kLog +
+                        " ---\n" + log_tail(fs::path(dir_) / yade_files::kLog));
+  }
+
+  // Rows of numbers of a CSV output with exactly this header.
+  std::vector<std::vector<double>> csv(const char* name, const std::string& header) const {
+    const fs::path p = fs::path(dir_) / name;
+    std::ifstream f(p);
+    if (!f) fail("missing output " + p.string());
+    std::string line;
+    if (!std::getline(f, line) || line != header)
+      fail(p.string() + ": line 1 is \"" + line + "\", expected \"" + header + "\"");
+    const std::size_t columns = static_cast<std::size_t>(std::count(header.begin(), header.end(), ',')) + 1;
+    std::vector<std::vector<double>> rows;
+    for (std::size_t n = 2; std::getline(f, line); ++n) {
+      if (line.empty()) continue;
+      std::vector<double> row;
+      std::stringstream ss(line);
+      std::string cell;
+      while (std::getline(ss, cell, ',')) {
+        char* end = nullptr;
+        const double v = std::strtod(cell.c_str(), &end);
+        if (cell.empty() || *end != '\0') fail(p.string() + " line " + std::to_string(n) + ": \"" + cell + "\" is not a number");
+        if (!std::isfinite(v)) fail(p.string() + " line " + std::to_string(n) + ": non-finite value " + cell);
+        row.push_back(v);
+      }
+      if (row.size() != columns)
+        fail(p.string() + " line " + std::to_string(n) + ": " + std::to_string(row.size()) + " values, expected " +
+             std::to_string(columns));
+      rows.push_back(std::move(row));
+    }
+    return rows;
+  }
+
+  nlohmann::json status() const {
+    const fs::path p = fs::path(dir_) / yade_files::kStatus;
+    std::ifstream f(p);
+    if (!f) fail("no status file " + p.string() + ": the script did not run to its end");
+    try {
+      return nlohmann::json::parse(f);
+    } catch (const nlohmann::json::exception& e) {
+      fail(p.string() + " is not valid JSON: " + e.what());
+    }
+  }
+
+ private:
+  std::string dir_;
+};
+
+// Why a grain centre is outside the container (beyond one of its walls: an overlap larger than the radius,
+// the grain went through), or "" if it is inside.
+std::string outside(const std::vector<DemWall>& walls, int dimension, const Vec3& x) {
+  char buf[160];
+  for (const DemWall& w : walls) {
+    const double d = w.distance(x);
+    if (d < 0) {
+      std::snprintf(buf, sizeof buf, "its centre is %.6g m beyond the %s wall", -d, w.name.c_str());
+      return buf;
+    }
+  }
+  if (dimension == 2 && x.y() != 0.0) {
+    std::snprintf(buf, sizeof buf, "off the x-z plane (y = %.6g m)", x.y());
+    return buf;
+  }
+  return "";
+}
+
+}  // namespace
+
+RelaxResult yade_read_back(const std::string& dir, const Packing& original, const Scene& scene,
+                           const RelaxPlan& plan) {
+  const Reader in(dir);
+  const nlohmann::json st = in.status();
+  const std::string status = st.value("status", "");
+  if (status != "ok") in.fail("the script reports status \"" + status + "\": " + st.value("message", "(no message)"));
+  const std::string reason = st.value("stop_reason", "");
+  if (reason != "kinetic-energy" && reason != "max-time") in.fail("unknown stop reason \"" + reason + "\" in " + yade_files::kStatus);
+
+  RelaxResult result;
+  result.stop_reason = reason;
+  result.simulated_time = st.value("time", 0.0);
+  result.wall_seconds = st.value("wall_seconds", 0.0);
+
+  // Final state: one row per grain, in id order.
+  const auto rows = in.csv(yade_files::kFinal, "id,x,y,z,vx,vy,vz");
+  const std::size_t n = original.grains.size();
+  const std::vector<DemWall> walls = dem_walls(scene.container, scene.dimension);
+  if (rows.size() != n)
+    in.fail("lost grains: " + std::string(yade_files::kFinal) + " has " + std::to_string(rows.size()) +
+            " grains, the packing " + std::to_string(n));
+  result.relaxed.grains = original.grains;
+  double max_speed = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto& r = rows[i];
+    if (r[0] != static_cast<double>(i + 1))
+      in.fail(std::string(yade_files::kFinal) + " row " + std::to_string(i + 1) + " has id " + std::to_string(r[0]) +
+              ", expected " + std::to_string(i + 1));
+    const Vec3 x(r[1], r[2], r[3]);
+    const std::string why = outside(walls, scene.dimension, x);
+    if (!why.empty()) in.fail("grain " + std::to_string(i + 1) + " left the container: " + why);
+    result.relaxed.grains[i].x = x;
+    max_speed = std::max(max_speed, Vec3(r[4], r[5], r[6]).norm());
+  }
+
+  for (const auto& r : in.csv(yade_files::kKinetic, "time,kinetic_energy")) result.kinetic_history.emplace_back(r[0], r[1]);
+  if (result.kinetic_history.empty()) in.fail(std::string(yade_files::kKinetic) + " is empty");
+  const double final_ke = result.kinetic_history.back().second;
+  if (reason == "kinetic-energy" && !(final_ke < plan.kinetic_threshold))
+    in.fail("stop reason is kinetic-energy but the last kinetic energy " + std::to_string(final_ke) +
+            " J is not below the threshold " + std::to_string(plan.kinetic_threshold) + " J");
+  if (reason == "max-time" && result.simulated_time < plan.max_time - 1.5 * plan.timestep)
+    in.fail("stop reason is max-time but the run ended at t = " + std::to_string(result.simulated_time) + " s < " +
+            std::to_string(plan.max_time) + " s");
+
+  for (const auto& r : in.csv(yade_files::kContacts, "i,j,fn,overlap")) {
+    const auto i = static_cast<std::int64_t>(r[0]), j = static_cast<std::int64_t>(r[1]);
+    if (i < 1 || i > static_cast<std::int64_t>(n) || j < 0 || j > static_cast<std::int64_t>(n))
+      in.fail(std::string(yade_files::kContacts) + ": contact " + std::to_string(i) + "-" + std::to_string(j) +
+              " names a grain that does not exist");
+    result.contacts.push_back({i, j, r[2]});
+  }
+
+  result.relaxed.meta = original.meta;
+  result.relaxed.meta["relax"] = {
+      {"engine", "yade"},
+      {"model", scene.relax.model},
+      {"stop_reason", reason},
+      {"simulated_time", result.simulated_time},
+      {"steps", st.value("steps", 0)},
+      {"timestep", plan.timestep},
+      {"timestep_rule", plan.timestep_rule},
+      {"kinetic_threshold", plan.kinetic_threshold},
+      {"final_kinetic_energy", final_ke},
+      {"max_speed", max_speed},
+      {"contacts", result.contacts.size()},
+      {"wall_seconds", result.wall_seconds},
+      {"steps_per_second", st.value("steps_per_second", 0.0)},
+      {"threads", st.value("threads", 0)},
+      {"yade_version", st.value("yade_version", "")},
+      {"velocities_file", (fs::path(dir) / yade_files::kFinal).string()},
+  };
+  return result;
+}
+
+}  // namespace btr

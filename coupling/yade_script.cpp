@@ -1,0 +1,277 @@
+// Writes the YADE script of a relaxation: a header saying how to run it and what it does, the shared Python
+// functions (yade_script_library.cpp), then the scene: numbers of the run, materials and pair values,
+// the grains, and exactly the walls of the container (dem_walls.h).
+//
+// Matching the LIGGGHTS run (liggghts_script.cpp) as closely as YADE allows:
+//  - same stop rule and schedule (liggghts_schedule): checks, averaging window, arming time, blow-up bound;
+//  - same pair values (materials.h): unlike species take the mean restitution and friction, a grain-wall
+//    contact the grain's; walls have the first species' material;
+//  - "hertz": Hertz-Mindlin with Tsuji's restitution damping, the formulas of LIGGGHTS' model hertz;
+//  - "hooke": YADE's linear law (linear spring + Coulomb slider, i.e. Cundall-Strack, plus a normal
+//    dashpot solved per contact for the restitution), its Young's modulus chosen so that kn equals
+//    LIGGGHTS' model hooke k_n for two grains of a species (both are proportional to the radius), and
+//    ks = kn as in LIGGGHTS. YADE's own choice kn = E r would be ~10x stiffer and unstable at the
+//    contact-time step;
+//  - YADE's Ip2 functors see a wall as a sphere of the grain's radius (R* = r/2, where LIGGGHTS has r):
+//    the walls' Young's modulus is raised so that a first-species grain meets a wall with LIGGGHTS' stiffness.
+#include "coupling/yade_script.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "coupling/dem_walls.h"
+#include "coupling/liggghts_script.h"
+#include "coupling/materials.h"
+#include "coupling/timestep.h"
+
+namespace btr {
+namespace {
+
+// Round-trip decimal form of a double, a valid Python literal.
+std::string num(double v) {
+  if (!std::isfinite(v)) throw std::invalid_argument("yade script: non-finite number " + std::to_string(v));
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+std::string py_string(const std::string& s) {
+  std::string out = "\"";
+  for (unsigned char c : s) {
+    if (c == '\\' || c == '"') {
+      out += '\\';
+      out += static_cast<char>(c);
+    } else if (c < 0x20 || c == 0x7f) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\x%02x", c);
+      out += buf;
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  return out + "\"";
+}
+
+[[noreturn]] void refuse(const Scene& scene, const std::string& field, const std::string& what) {
+  throw std::invalid_argument((scene.file.empty() ? "scene '" + scene.name + "'" : scene.file) + ": " + field + ": " +
+                              what);
+}
+
+void check_material(const Scene& scene, const Component& c) {
+  const std::string where = "species " + std::to_string(c.species) + " material";
+  const Material& m = c.material;
+  if (!(m.young > 0)) refuse(scene, where + ".young", "must be > 0 Pa, got " + num(m.young));
+  if (!(m.poisson >= 0 && m.poisson < 0.5)) refuse(scene, where + ".poisson", "must be in [0, 0.5), got " + num(m.poisson));
+  // en = 0 has no finite damping coefficient (log 0); en = 1 is elastic.
+  if (!(m.restitution > 0 && m.restitution <= 1))
+    refuse(scene, where + ".restitution", "must be in (0, 1] for YADE's en, got " + num(m.restitution));
+  if (!(m.friction >= 0)) refuse(scene, where + ".friction", "must be >= 0, got " + num(m.friction));
+  if (!(m.rolling_friction >= 0)) refuse(scene, where + ".rolling_friction", "must be >= 0, got " + num(m.rolling_friction));
+  if (!(c.density > 0)) refuse(scene, "species " + std::to_string(c.species) + " density", "must be > 0");
+}
+
+std::string label(const Component& c) { return "species" + std::to_string(c.species); }
+
+// YADE Young's modulus of the linear law for a material: kn = E r for two grains of radius r, set equal to
+// LIGGGHTS' k_n for them (proportional to r, so any r gives the same E).
+double hooke_young(const Material& m, double density, double velocity) {
+  const double r = 1e-3;
+  const double m_eff = 0.5 * grain_mass(r, density);
+  return hooke_stiffness(0.5 * r, m_eff, effective_young(m, m), velocity) / r;
+}
+
+// Factor on the walls' Young's modulus so that YADE's wall contact (seen as two spheres of radius r) has the
+// stiffness LIGGGHTS gives a grain of the walls' own material against a wall.
+//  Hertz: kn ~ E* sqrt(R*), LIGGGHTS R* = r, YADE r/2: E*_yade = sqrt(2) E*  ->  E_wall = E / (sqrt(2) - 1).
+//  Hooke: LIGGGHTS k ~ R*^(2/5) m*^(1/5) is 2^(3/5) = c times the like-pair value (R* = r, m* = m);
+//         YADE 1 / kn = 1/(2 E_wall r) + 1/(2 E r) = 1/(c E r)  ->  E_wall = c E / (2 - c).
+double wall_young_factor(bool hooke) {
+  if (!hooke) return 1.0 / (std::sqrt(2.0) - 1.0);
+  const double c = std::pow(2.0, 0.6);
+  return c / (2.0 - c);
+}
+
+// Panels of the facet cylinder: enough that the gap between a panel edge and the true cylinder,
+// R (1/cos(pi/n) - 1), is at most 0.5% of the smallest radius; at least 64.
+int cylinder_segments(double radius, double r_min) {
+  const double tol = 0.005 * r_min;
+  int n = 64;
+  while (n < 100000 && radius * (1.0 / std::cos(M_PI / n) - 1.0) > tol) n = static_cast<int>(std::ceil(n * 1.05));
+  return n;
+}
+
+struct PackingStats {
+  double r_min = std::numeric_limits<double>::infinity();
+  double r_max = 0.0;
+  double r_mean = 0.0;
+  double top = 0.0;  // highest z + r
+};
+
+PackingStats stats_of(const Packing& packing) {
+  PackingStats s;
+  for (const Grain& g : packing.grains) {
+    s.r_min = std::min(s.r_min, g.r);
+    s.r_max = std::max(s.r_max, g.r);
+    s.r_mean += g.r;
+    s.top = std::max(s.top, g.x.z() + g.r);
+  }
+  s.r_mean /= static_cast<double>(packing.grains.size());
+  return s;
+}
+
+// Rolling resistance for the Hertz-Mindlin moment law, which takes one bending stiffness krot and one
+// plastic coefficient eta for every contact (no rolling dashpot, as LIGGGHTS' epsd2): the moment is capped
+// at eta (r1 + r2)/2 Fn, so eta = mu_r / 2 gives epsd2's cap mu_r R* Fn for equal radii; krot = kt R*^2 as
+// epsd2, with kt the Mindlin tangential stiffness of two mean grains of the first species pressed by one
+// grain's weight (YADE's krot is a constant, epsd2's follows the overlap).
+std::string rolling_call(const Scene& scene, const PackingStats& st, double mu_r) {
+  const Component& c = scene.grains.components.front();
+  const Material& m = c.material;
+  const double r_star = 0.5 * st.r_mean;
+  const double kno = 4.0 / 3.0 * effective_young(m, m) * std::sqrt(r_star);
+  const double overlap = std::pow(grain_mass(st.r_mean, c.density) * kGravity / kno, 2.0 / 3.0);
+  const double shear_modulus = m.young / (2.0 * (1.0 + m.poisson));
+  const double kt = 4.0 * shear_modulus * std::sqrt(r_star * overlap) / (2.0 - m.poisson);
+  return "    set_rolling(krot=" + num(kt * r_star * r_star) + ", eta=" + num(0.5 * mu_r) + ")  # rolling friction " +
+         num(mu_r) + ": krot = kt R*^2, cap mu_r R* Fn\n";
+}
+
+const char* kHeader = R"(#
+# Run it in one of two ways (every file is read from and written to this script's folder):
+#   PYTHONPATH=/usr/lib/x86_64-linux-gnu/yade-double/py OMP_NUM_THREADS=1 /usr/bin/python3 relax_yade.py
+#       what `btr relax` does: importing the yade module opens no network service;
+#   yade -n -x -j 4 relax_yade.py
+#       e.g. on a cluster; the launcher also opens a TCP Python console (port 9000+) and an XML-RPC
+#       server (port 21000+).
+# Input: yade_packing.csv (id,x,y,z,radius,species). Outputs: yade_final.csv (id,x,y,z,vx,vy,vz),
+# yade_kinetic.csv (time,kinetic_energy), yade_contacts.csv (i,j,fn,overlap; j = 0 for a wall), yade.log,
+# and, written last, yade_status.json (status "ok" or "failed", stop reason, time, steps, message).
+#
+# Contact law: "hertz" is Hertz-Mindlin (Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin);
+# "hooke" is YADE's linear law (Ip2_ViscElMat_ViscElMat_ViscElPhys, Law2_ScGeom_ViscElPhys_Basic: linear
+# spring and Coulomb slider as in Cundall-Strack, plus a normal dashpot), with kn equal to LIGGGHTS' model
+# hooke k_n for like grains and ks = kn. Rolling friction only if the scene sets it (Hertz-Mindlin moment law).
+# Damping: viscous only, from the pair's restitution coefficient (the Ip2 functors' en MatchMaker); no
+# NewtonIntegrator damping, as in LIGGGHTS, so the dynamics stays physical.
+# Pairs: unlike species take the mean restitution and friction, a grain-wall contact the grain's values.
+# Walls: the first species' material, Young's modulus raised because YADE sees a wall as a sphere of the
+# grain's radius; planes are infinite (utils.wall); a periodic floor is a thin box wider than the cell.
+# Stop rule (the LIGGGHTS script's): every STEPS_PER_CHECK steps the translational kinetic energy E and its
+# mean over the last STEPS_PER_CHECK steps are compared with KINETIC_THRESHOLD; the run stops when both are
+# below it, once armed (the mean was above it once, or t >= ARMING_TIME), else after MAX_CHECKS checks.
+# A run fails on NaN, E above KINETIC_BOUND, lost bodies, or a grain below the floor.
+# 2D: disks in the x-z plane are YADE spheres (sphere masses) with blockedDOFs "yXZ": no motion along y,
+# rotation about y only.
+)";
+
+}  // namespace
+
+std::string yade_script(const Packing& packing, const Scene& scene, const RelaxPlan& plan) {
+  const std::string& model = scene.relax.model;
+  if (model != "hertz" && model != "hooke") refuse(scene, "relax.model", "expected \"hertz\" or \"hooke\", got \"" + model + "\"");
+  if (scene.dimension != 2 && scene.dimension != 3) refuse(scene, "scene.dimension", "expected 2 or 3");
+  if (packing.grains.empty()) refuse(scene, "packing", "has no grains to relax");
+  if (scene.grains.components.empty()) refuse(scene, "grains", "has no component (no material)");
+  if (!(plan.timestep > 0) || !(plan.max_time > 0) || !(plan.kinetic_threshold > 0))
+    throw std::invalid_argument("yade script: time step, max time and kinetic threshold must be > 0");
+  const bool hooke = model == "hooke";
+  const auto& comps = scene.grains.components;
+  for (const Component& c : comps) check_material(scene, c);
+  for (const Grain& g : packing.grains) component_index(scene, g.species);  // throws for an unknown species
+
+  // YADE's Hertz-Mindlin moment law takes one rolling friction for all contacts; the linear law has none.
+  const double rolling = comps.front().material.rolling_friction;
+  for (const Component& c : comps) {
+    if (c.material.rolling_friction > 0 && hooke)
+      refuse(scene, "material.rolling_friction",
+             "YADE's linear law (Law2_ScGeom_ViscElPhys_Basic) has no Coulomb rolling friction; use model \"hertz\"");
+    if (c.material.rolling_friction != rolling)
+      refuse(scene, "material.rolling_friction",
+             "YADE's Hertz-Mindlin moment law takes one rolling friction for all species; they differ here");
+  }
+
+  std::vector<DemWall> walls;
+  try {
+    walls = dem_walls(scene.container, scene.dimension);
+  } catch (const std::runtime_error& e) {
+    refuse(scene, "container", e.what());
+  }
+  const PackingStats st = stats_of(packing);
+  const LiggghtsSchedule sched = liggghts_schedule(packing.grains, scene, plan);
+  const double velocity = hooke ? hooke_characteristic_velocity(packing.grains) : 0.0;
+
+  std::ostringstream out;
+  out << "#!/usr/bin/python3\n"
+      << "# YADE relaxation of the packing of scene " << py_string(scene.name) << " (" << py_string(scene.file)
+      << "), written by btr " << BTR_VERSION << " (coupling/yade_script.cpp).\n"
+      << kHeader << yade_script_library();
+  out << "\n\n# " << std::string(100, '-') << "\n# The scene (generated)\n"
+      << "MODEL = " << py_string(model) << "\n"
+      << "DIMENSION = " << scene.dimension << "\n"
+      << "GRAVITY = " << num(kGravity) << "  # m/s^2, along -z\n"
+      << "TIMESTEP = " << num(plan.timestep) << "  # s\n"
+      << "TIMESTEP_RULE = " << py_string(plan.timestep_rule) << "\n"
+      << "KINETIC_THRESHOLD = " << num(plan.kinetic_threshold) << "  # J, stop_kinetic_ratio * sum m g d\n"
+      << "KINETIC_BOUND = " << num(sched.blowup_bound) << "  # J, twice the gravitational + elastic energy\n"
+      << "STEPS_PER_CHECK = " << sched.steps_per_check << "\n"
+      << "AVERAGE_EVERY = " << sched.average_every << "  # steps between samples of the mean\n"
+      << "MAX_CHECKS = " << sched.max_checks << "  # max_time " << num(plan.max_time) << " s\n"
+      << "ARMING_TIME = " << num(sched.arming_time) << "  # s, sqrt(2 r_min / g)\n\n\n"
+      << "def scene():\n";
+
+  // Materials: elastic constants and density per species, then the walls'.
+  if (hooke)
+    out << "    # young: kn = young * r for two grains of radius r equals LIGGGHTS' model hooke k_n with the\n"
+        << "    # characteristic velocity " << num(velocity) << " m/s; poisson = ks/kn = 1 (LIGGGHTS: kt = kn)\n";
+  auto young_of = [&](const Component& c) {
+    return hooke ? hooke_young(c.material, c.density, velocity) : c.material.young;
+  };
+  for (const Component& c : comps)
+    out << "    add_material(" << py_string(label(c)) << ", young=" << num(young_of(c))
+        << ", poisson=" << num(hooke ? 1.0 : c.material.poisson) << ", density=" << num(c.density)
+        << ", species=" << c.species << ")\n";
+  const Component& first = comps.front();
+  out << "    add_material(\"walls\", young=" << num(young_of(first) * wall_young_factor(hooke))
+      << ", poisson=" << num(hooke ? 1.0 : first.material.poisson) << ", density=" << num(first.density)
+      << ")  # species " << first.species << "'s material, stiffer (YADE sees a wall as a sphere)\n";
+  for (std::size_t a = 0; a < comps.size(); ++a) {
+    for (std::size_t b = a; b < comps.size(); ++b) {
+      const Material p = pair_material(comps[a].material, comps[b].material);
+      out << "    pair(" << py_string(label(comps[a])) << ", " << py_string(label(comps[b]))
+          << ", restitution=" << num(p.restitution) << ", friction=" << num(p.friction) << ")\n";
+    }
+    out << "    pair(" << py_string(label(comps[a])) << ", \"walls\", restitution="
+        << num(comps[a].material.restitution) << ", friction=" << num(comps[a].material.friction) << ")\n";
+  }
+  if (rolling > 0) out << rolling_call(scene, st, rolling);
+
+  const Container& box = scene.container;
+  if (box.kind == ContainerKind::Periodic) {
+    // 2D: a y period wide enough that no disk meets its own image; z: far above the packing.
+    const double ly = scene.dimension == 2 ? 8.0 * st.r_max : box.size_y;
+    const double lz = std::max(2.0 * box.height, 4.0 * st.top);
+    out << "    periodic_cell(" << num(box.size_x) << ", " << num(ly) << ", " << num(lz)
+        << ")  # the container's period" << (scene.dimension == 2 ? " in x" : "s in x and y")
+        << "; z: 4x the packing top\n";
+  }
+  out << "    add_grains(" << py_string(yade_files::kPacking) << ")\n";
+  for (const DemWall& w : walls) {
+    if (w.kind == DemWall::Kind::Plane) {
+      out << "    add_plane(axis=" << w.axis << ", position=" << num(w.position) << ")  # " << w.name << "\n";
+    } else {
+      const double height = box.height > 0 ? box.height : 2.0 * st.top;
+      out << "    add_cylinder(radius=" << num(w.position) << ", height=" << num(height)
+          << ", segments=" << cylinder_segments(w.position, st.r_min) << ")  # " << w.name
+          << ": panel edges at most r_min/200 outside; height " << (box.height > 0 ? "of the container" : "2x the packing top")
+          << "\n";
+    }
+  }
+  out << "\n\nsys.exit(main())\n";
+  return out.str();
+}
+
+}  // namespace btr

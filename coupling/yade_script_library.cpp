@@ -1,0 +1,333 @@
+// The Python half of every YADE relaxation script: reading the packing, walls, contact laws, the run loop with
+// its stop rule and failure checks, and the output files. yade_script.cpp writes the header before it and the
+// scene-specific calls (numbers, materials, pairs, grains, walls) after it.
+#include "coupling/yade_script.h"
+
+namespace btr {
+
+const char* yade_script_library() {
+  return R"yade_py(import json
+import math
+import os
+import sys
+import time
+import traceback
+
+# Everything is read from and written to the folder holding this script, wherever it is run from
+# (`yade -x` runs scripts with __file__ pointing to the launcher, hence argv[0]).
+HERE = os.path.dirname(os.path.abspath(sys.argv[0]))
+STATUS_FILE = "yade_status.json"
+FINAL_FILE = "yade_final.csv"
+KINETIC_FILE = "yade_kinetic.csv"
+CONTACTS_FILE = "yade_contacts.csv"
+LOG_FILE = "yade.log"
+
+
+class RunFailure(Exception):
+    pass
+
+
+def path(name):
+    return os.path.join(HERE, name)
+
+
+_log = None
+
+
+def log(message):
+    global _log
+    if _log is None:
+        _log = open(path(LOG_FILE), "w")
+    print(message, flush=True)
+    _log.write(message + "\n")
+    _log.flush()
+
+
+def write_atomically(name, text):
+    tmp = path(name + ".tmp")
+    with open(tmp, "w") as f:
+        f.write(text)
+    os.replace(tmp, path(name))
+
+
+# Stale outputs of an earlier run must never be mistaken for this run's.
+for _name in (STATUS_FILE, FINAL_FILE, KINETIC_FILE, CONTACTS_FILE):
+    if os.path.exists(path(_name)):
+        os.remove(path(_name))
+
+try:
+    import yade
+    from yade import O, utils
+    from yade.wrapper import (Bo1_Box_Aabb, Bo1_Facet_Aabb, Bo1_Sphere_Aabb, Bo1_Wall_Aabb, ForceResetter,
+                              FrictMat, Ig2_Box_Sphere_ScGeom, Ig2_Facet_Sphere_ScGeom, Ig2_Sphere_Sphere_ScGeom,
+                              Ig2_Wall_Sphere_ScGeom, InsertionSortCollider, InteractionLoop,
+                              Ip2_FrictMat_FrictMat_MindlinPhys, Ip2_ViscElMat_ViscElMat_ViscElPhys,
+                              Law2_ScGeom_MindlinPhys_Mindlin, Law2_ScGeom_ViscElPhys_Basic, MatchMaker,
+                              NewtonIntegrator, ViscElMat)
+except ImportError as exc:
+    log("cannot import yade (%s): run with PYTHONPATH=/usr/lib/x86_64-linux-gnu/yade-double/py, "
+        "or with `yade -n -x %s`" % (exc, os.path.basename(sys.argv[0])))
+    write_atomically(STATUS_FILE, json.dumps({"status": "failed", "message": "cannot import yade: %s" % exc}) + "\n")
+    sys.exit(2)
+
+# Scene state filled by the generated calls of scene() below.
+_materials = {}      # label -> material id
+_species = {}        # species -> material id
+_pairs = []          # (material id, material id, restitution, friction)
+_grains = []         # [(packing id, body id)] in packing order
+_walls = []          # body ids of walls, facets and the periodic floor
+_cell = None         # (Lx, Ly, Lz) when periodic
+_rolling = None      # dict(krot=, eta=) for the Hertz-Mindlin moment law; None = no rolling term
+_history = []        # [(time, translational kinetic energy)] at t = 0 and at every check
+
+
+def add_material(label, young, poisson, density, species=None):
+    """Elastic constants and density; restitution and friction are per pair (pair())."""
+    if MODEL == "hertz":
+        mat = FrictMat(young=young, poisson=poisson, frictionAngle=0.0, density=density, label=label)
+    else:
+        # ViscElMat with young and en: kn = 1 / (1/(2 E1 r1) + 1/(2 E2 r2)), ks = poisson * kn (here
+        # `poisson` is the ratio ks/kn), normal dashpot from the pair's restitution; en is a placeholder
+        # overridden by the Ip2 functor's MatchMaker.
+        mat = ViscElMat(young=young, poisson=poisson, en=1.0, frictionAngle=0.0, density=density, label=label)
+    mid = O.materials.append(mat)
+    _materials[label] = mid
+    if species is not None:
+        _species[species] = mid
+
+
+def pair(label_a, label_b, restitution, friction):
+    _pairs.append((_materials[label_a], _materials[label_b], restitution, friction))
+
+
+def set_rolling(krot, eta):
+    global _rolling
+    _rolling = dict(krot=krot, eta=eta)
+
+
+def periodic_cell(lx, ly, lz):
+    global _cell
+    O.periodic = True
+    O.cell.setBox(lx, ly, lz)
+    _cell = (lx, ly, lz)
+
+
+def add_grains(csv_name):
+    bodies = []
+    ids = []
+    with open(path(csv_name)) as f:
+        header = f.readline().strip()
+        if header != "id,x,y,z,radius,species":
+            raise RunFailure("%s: header is %r, expected 'id,x,y,z,radius,species'" % (csv_name, header))
+        for n, line in enumerate(f, start=2):
+            if not line.strip():
+                continue
+            try:
+                gid, x, y, z, r, sp = line.split(",")
+                gid, x, y, z, r, sp = int(gid), float(x), float(y), float(z), float(r), int(sp)
+            except ValueError:
+                raise RunFailure("%s line %d: expected id,x,y,z,radius,species, got %r" % (csv_name, n, line.strip()))
+            if gid != len(ids) + 1:
+                raise RunFailure("%s line %d: id %d, expected %d (ids are 1..N in order)" % (csv_name, n, gid, len(ids) + 1))
+            if not all(math.isfinite(v) for v in (x, y, z, r)) or r <= 0.0:
+                raise RunFailure("%s line %d: non-finite value or radius <= 0" % (csv_name, n))
+            if sp not in _species:
+                raise RunFailure("%s line %d: species %d has no material" % (csv_name, n, sp))
+            b = utils.sphere((x, y, z), r, material=_species[sp], color=(0.8, 0.6, 0.2))
+            if DIMENSION == 2:
+                # Disks in the x-z plane: no motion along y, rotation about y only.
+                b.state.blockedDOFs = "yXZ"
+            bodies.append(b)
+            ids.append(gid)
+    if not ids:
+        raise RunFailure("%s has no grains" % csv_name)
+    body_ids = O.bodies.append(bodies)
+    _grains.extend(zip(ids, body_ids))
+
+
+def add_plane(axis, position):
+    """An infinite plane wall. In a periodic cell YADE's collider cannot bound an infinite Wall, so the
+    floor is a thin box whose top face is the plane, wider than the cell (allowBiggerThanPeriod)."""
+    if _cell is not None:
+        if axis != 2:
+            raise RunFailure("a periodic cell has no side walls")
+        t = 0.5 * min(_cell[0], _cell[1])
+        half = (1000.0 * _cell[0], 1000.0 * _cell[1], 0.5 * t)
+        b = utils.box((0.0, 0.0, position - 0.5 * t), half, fixed=True, material=_materials["walls"])
+    else:
+        b = utils.wall(position, axis=axis, material=_materials["walls"])
+    _walls.append(O.bodies.append(b))
+
+
+def add_cylinder(radius, height, segments):
+    """Inner surface of a vertical cylinder about the z axis, from z = 0 to height, as `segments` flat panels
+    (2 facets each) whose faces are tangent to the true cylinder: vertices at radius / cos(pi / segments), so
+    a grain touching the container's cylinder touches a panel without overlap; at a panel edge the gap to
+    the true surface is radius * (1 / cos(pi / segments) - 1)."""
+    rv = radius / math.cos(math.pi / segments)
+    facets = []
+    for k in range(segments):
+        a0 = 2.0 * math.pi * k / segments
+        a1 = 2.0 * math.pi * (k + 1) / segments
+        p0 = (rv * math.cos(a0), rv * math.sin(a0))
+        p1 = (rv * math.cos(a1), rv * math.sin(a1))
+        v00, v10 = (p0[0], p0[1], 0.0), (p1[0], p1[1], 0.0)
+        v01, v11 = (p0[0], p0[1], height), (p1[0], p1[1], height)
+        for tri in ((v00, v10, v11), (v00, v11, v01)):
+            facets.append(utils.facet(tri, material=_materials["walls"], color=(0.5, 0.5, 0.5)))
+    _walls.extend(O.bodies.append(facets))
+
+
+def build_engines():
+    en = MatchMaker(matches=[(a, b, e) for a, b, e, _ in _pairs])
+    friction_angle = MatchMaker(matches=[(a, b, math.atan(mu)) for a, b, _, mu in _pairs])
+    if MODEL == "hertz":
+        ip2 = Ip2_FrictMat_FrictMat_MindlinPhys(en=en, frictAngle=friction_angle)
+        law = Law2_ScGeom_MindlinPhys_Mindlin()
+        if _rolling is not None:
+            ip2.krot = _rolling["krot"]
+            ip2.ktwist = 0.0
+            ip2.eta = _rolling["eta"]
+            law.includeMoment = True
+    else:
+        ip2 = Ip2_ViscElMat_ViscElMat_ViscElPhys(en=en, frictAngle=friction_angle)
+        law = Law2_ScGeom_ViscElPhys_Basic()
+    collider = InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Wall_Aabb(), Bo1_Facet_Aabb(), Bo1_Box_Aabb()],
+                                     label="collider")
+    if _cell is not None:
+        # The floor box is wider than the cell: sweep along z, where it is thin.
+        collider.allowBiggerThanPeriod = True
+        collider.sortAxis = 2
+    O.engines = [
+        ForceResetter(),
+        collider,
+        InteractionLoop([Ig2_Sphere_Sphere_ScGeom(), Ig2_Wall_Sphere_ScGeom(), Ig2_Facet_Sphere_ScGeom(),
+                         Ig2_Box_Sphere_ScGeom()], [ip2], [law]),
+        # No numerical (non-viscous) damping: all dissipation is in the contact dashpots set by the
+        # restitution coefficient and in friction, as in LIGGGHTS, so the dynamics stays physical.
+        # kinSplit + O.trackEnergy give the translational kinetic energy of the stop rule.
+        NewtonIntegrator(gravity=(0.0, 0.0, -GRAVITY), damping=0.0, kinSplit=True, label="newton"),
+    ]
+    O.trackEnergy = True
+
+
+def translational_kinetic_energy():
+    return O.energy["kinTrans"]
+
+
+def wrap(x, length):
+    return x - length * math.floor(x / length + 0.5)
+
+
+def write_history():
+    lines = ["time,kinetic_energy"] + ["%.17g,%.17g" % h for h in _history]
+    write_atomically(KINETIC_FILE, "\n".join(lines) + "\n")
+
+
+def write_outputs():
+    write_history()
+    lines = ["id,x,y,z,vx,vy,vz"]
+    for gid, bid in _grains:
+        b = O.bodies[bid]
+        p, v = b.state.pos, b.state.vel
+        x, y = p[0], p[1]
+        if _cell is not None:
+            x = wrap(x, _cell[0])
+            if DIMENSION == 3:
+                y = wrap(y, _cell[1])
+        lines.append("%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g" % (gid, x, y, p[2], v[0], v[1], v[2]))
+    write_atomically(FINAL_FILE, "\n".join(lines) + "\n")
+    packing_id = {bid: gid for gid, bid in _grains}
+    lines = ["i,j,fn,overlap"]
+    for i in O.interactions:
+        if not i.isReal or i.geom.penetrationDepth <= 0.0:
+            continue
+        a, b = packing_id.get(i.id1, 0), packing_id.get(i.id2, 0)
+        if a == 0 or (b != 0 and b < a):
+            a, b = b, a
+        lines.append("%d,%d,%.17g,%.17g" % (a, b, i.phys.normalForce.norm(), i.geom.penetrationDepth))
+    write_atomically(CONTACTS_FILE, "\n".join(lines) + "\n")
+
+
+def write_status(status, reason, message, wall):
+    steps = O.iter
+    write_atomically(STATUS_FILE, json.dumps({
+        "status": status, "stop_reason": reason, "message": message,
+        "time": O.time, "steps": steps, "timestep": O.dt, "wall_seconds": wall,
+        "steps_per_second": steps / wall if wall > 0 else 0.0,
+        "grains": len(_grains), "bodies": len(O.bodies), "threads": O.numThreads,
+        "yade_version": getattr(yade.config, "version", "unknown"), "model": MODEL,
+    }, indent=1) + "\n")
+
+
+def relax():
+    """The stop rule of the LIGGGHTS script, step for step: every STEPS_PER_CHECK steps the translational
+    kinetic energy E and its mean over the last STEPS_PER_CHECK steps (sampled every AVERAGE_EVERY steps) are
+    compared with KINETIC_THRESHOLD; the run stops when both are below it, once armed (the mean was above the
+    threshold once, or t >= ARMING_TIME); otherwise after MAX_CHECKS checks (max-time). E above KINETIC_BOUND
+    is a blow-up."""
+    build_engines()
+    O.dt = TIMESTEP
+    n_bodies = len(O.bodies)
+    log("YADE %s, %d threads, model %s, %d grains, %d wall bodies" % (
+        getattr(yade.config, "version", "?"), O.numThreads, MODEL, len(_grains), len(_walls)))
+    log("time step %.6g s: %s (YADE's P-wave estimate: %.6g s)" % (TIMESTEP, TIMESTEP_RULE, utils.PWaveTimeStep()))
+    log("stop: E and its mean < %.6g J every %d steps, armed at t >= %.6g s; at most %d checks; blow-up above %.6g J"
+        % (KINETIC_THRESHOLD, STEPS_PER_CHECK, ARMING_TIME, MAX_CHECKS, KINETIC_BOUND))
+    samples = STEPS_PER_CHECK // AVERAGE_EVERY
+    _history.append((0.0, sum(0.5 * O.bodies[b].state.mass * O.bodies[b].state.vel.squaredNorm() for _, b in _grains)))
+    armed = False
+    next_report = time.time() + 10.0
+    for _check in range(MAX_CHECKS):
+        total = 0.0
+        for _sample in range(samples):
+            for _step in range(AVERAGE_EVERY):
+                O.step()
+            total += translational_kinetic_energy()
+        mean = total / samples
+        e = translational_kinetic_energy()
+        _history.append((O.time, e))
+        if not (math.isfinite(e) and math.isfinite(mean)):
+            raise RunFailure("kinetic energy is %r at t = %.6g s (step %d)" % (e, O.time, O.iter))
+        if e > KINETIC_BOUND:
+            raise RunFailure("blow-up: kinetic energy %.6g J above the bound %.6g J (twice the energy the packing "
+                             "holds) at t = %.6g s (step %d)" % (e, KINETIC_BOUND, O.time, O.iter))
+        if len(O.bodies) != n_bodies:
+            raise RunFailure("bodies were lost: %d left of %d" % (len(O.bodies), n_bodies))
+        if mean >= KINETIC_THRESHOLD:
+            armed = True
+        if (armed or O.time >= ARMING_TIME) and mean < KINETIC_THRESHOLD and e < KINETIC_THRESHOLD:
+            return "kinetic-energy"
+        if time.time() >= next_report:
+            next_report = time.time() + 10.0
+            log("t = %.6g s, step %d, kinetic energy %.6g J (%.3g x threshold)" % (
+                O.time, O.iter, e, e / KINETIC_THRESHOLD))
+    return "max-time"
+
+
+def main():
+    t0 = time.time()
+    try:
+        scene()
+        reason = relax()
+        for gid, bid in _grains:
+            if O.bodies[bid].state.pos[2] < 0.0:
+                raise RunFailure("grain %d fell through the floor (z = %.6g m)" % (gid, O.bodies[bid].state.pos[2]))
+        write_outputs()
+        wall = time.time() - t0
+        log("stopped by %s at t = %.6g s after %d steps, %.3g s wall time (%.4g steps/s)" % (
+            reason, O.time, O.iter, wall, O.iter / wall if wall > 0 else 0.0))
+        write_status("ok", reason, "", wall)
+        return 0
+    except Exception as exc:
+        message = str(exc) if isinstance(exc, RunFailure) else "%s: %s" % (type(exc).__name__, exc)
+        log("FAILED: " + message)
+        log(traceback.format_exc())
+        if _history:
+            write_history()
+        write_status("failed", "", message, time.time() - t0)
+        return 1
+)yade_py";
+}
+
+}  // namespace btr

@@ -1,0 +1,479 @@
+// YADE coupling: the generated script (walls, materials, how it is run), real relaxations in every
+// container, and failures (broken packing, broken script, blow-up, grains leaving) reported as such.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "coupling/overlap.h"
+#include "coupling/relax.h"
+#include "coupling/relax_plan.h"
+#include "coupling/yade_script.h"
+#include "relax_fixtures.h"
+
+namespace fs = std::filesystem;
+using btr::ContainerKind;
+using btr_test::container;
+
+namespace {
+
+bool have_yade() { return fs::exists(std::string(btr::kYadePythonPath) + "/yade/__init__.py"); }
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+struct Case {
+  std::string name;
+  int dimension;
+  btr::Container container;
+  int grains;
+};
+
+std::vector<Case> all_cases() {
+  return {
+      {"open3d", 3, container(ContainerKind::Open), 300},
+      {"box3d", 3, container(ContainerKind::Box, 0.02, 0.016), 300},
+      {"periodic3d", 3, container(ContainerKind::Periodic, 0.02, 0.02), 300},
+      {"heleshaw3d", 3, container(ContainerKind::HeleShaw, 0.06, 0.005), 200},
+      {"cylinder3d", 3, container(ContainerKind::Cylinder, 0.011), 300},
+      {"open2d", 2, container(ContainerKind::Open), 200},
+      {"box2d", 2, container(ContainerKind::Box, 0.05), 200},
+      {"periodic2d", 2, container(ContainerKind::Periodic, 0.05), 200},
+  };
+}
+
+std::string g17(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+// The walls the script must create, computed here from the container: "plane AXIS POSITION" and
+// "cylinder RADIUS".
+std::multiset<std::string> expected_walls(const Case& c) {
+  std::multiset<std::string> w{"plane 2 0"};
+  const btr::Container& k = c.container;
+  auto plane = [&](int axis, double pos) { w.insert("plane " + std::to_string(axis) + " " + g17(pos)); };
+  switch (k.kind) {
+    case ContainerKind::Box:
+      plane(0, -k.size_x / 2), plane(0, k.size_x / 2);
+      if (c.dimension == 3) plane(1, -k.size_y / 2), plane(1, k.size_y / 2);
+      break;
+    case ContainerKind::HeleShaw:
+      plane(0, -k.size_x / 2), plane(0, k.size_x / 2), plane(1, -k.gap / 2), plane(1, k.gap / 2);
+      break;
+    case ContainerKind::Cylinder: w.insert("cylinder " + g17(k.radius)); break;
+    default: break;
+  }
+  return w;
+}
+
+// The walls a generated script creates (calls inside scene()).
+std::multiset<std::string> walls_in_script(const std::string& script) {
+  std::multiset<std::string> w;
+  std::istringstream in(script);
+  std::string line;
+  const std::regex plane(R"(^    add_plane\(axis=(\d), position=([^)]+)\))");
+  const std::regex cylinder(R"(^    add_cylinder\(radius=([^,]+), height=([^,]+), segments=(\d+)\))");
+  std::smatch m;
+  while (std::getline(in, line)) {
+    if (line.rfind("    add_plane(", 0) != 0 && line.rfind("    add_cylinder(", 0) != 0) continue;
+    if (std::regex_search(line, m, plane)) w.insert("plane " + std::string(m[1]) + " " + std::string(m[2]));
+    else if (std::regex_search(line, m, cylinder)) w.insert("cylinder " + std::string(m[1]));
+    else w.insert("unparsed: " + line);
+  }
+  return w;
+}
+
+std::string line_starting(const std::string& text, const std::string& prefix) {
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind(prefix, 0) == 0) return line;
+  return "";
+}
+
+// Independent checks of a relaxed packing: brute-force overlaps (nearest periodic image) and walls.
+double largest_pair_overlap(const btr::Grains& g, const btr::Container& c, int dim) {
+  double worst = 0;
+  for (std::size_t i = 0; i < g.size(); ++i)
+    for (std::size_t j = i + 1; j < g.size(); ++j) {
+      btr::Vec3 d = g[j].x - g[i].x;
+      if (c.kind == ContainerKind::Periodic) {
+        d.x() -= c.size_x * std::round(d.x() / c.size_x);
+        if (dim == 3) d.y() -= c.size_y * std::round(d.y() / c.size_y);
+      }
+      worst = std::max(worst, (g[i].r + g[j].r - d.norm()) / std::min(g[i].r, g[j].r));
+    }
+  return worst;
+}
+
+// Largest (r - distance to the wall) / r over grains and the container's true walls (the true
+// cylinder, not YADE's panels).
+double largest_wall_overlap(const btr::Grains& g, const btr::Container& c, int dim) {
+  double worst = 0;
+  for (const btr::Grain& q : g) {
+    std::vector<double> dist{q.x.z()};
+    if (c.kind == ContainerKind::Box) {
+      dist.push_back(c.size_x / 2 - std::abs(q.x.x()));
+      if (dim == 3) dist.push_back(c.size_y / 2 - std::abs(q.x.y()));
+    } else if (c.kind == ContainerKind::HeleShaw) {
+      dist.push_back(c.size_x / 2 - std::abs(q.x.x()));
+      dist.push_back(c.gap / 2 - std::abs(q.x.y()));
+    } else if (c.kind == ContainerKind::Cylinder) {
+      dist.push_back(c.radius - std::hypot(q.x.x(), q.x.y()));
+    } else if (c.kind == ContainerKind::Periodic) {
+      EXPECT_TRUE(q.x.x() >= -c.size_x / 2 && q.x.x() < c.size_x / 2) << q.x.x();
+      if (dim == 3) EXPECT_TRUE(q.x.y() >= -c.size_y / 2 && q.x.y() < c.size_y / 2) << q.x.y();
+    }
+    for (double d : dist) worst = std::max(worst, (q.r - d) / q.r);
+  }
+  return worst;
+}
+
+double weight_of(const btr::Grains& g, double density) {
+  double w = 0;
+  for (const btr::Grain& q : g) w += 4.0 / 3.0 * M_PI * std::pow(q.r, 3) * density * 9.81;
+  return w;
+}
+
+double threshold_by_hand(const btr::Grains& g, const btr::Scene& s) {
+  double sum = 0;
+  for (const btr::Grain& q : g) {
+    const double m = 4.0 / 3.0 * M_PI * q.r * q.r * q.r * s.grains.components[q.species - 1].density;
+    sum += m * 9.81 * 2 * q.r;
+  }
+  return s.relax.stop_kinetic_ratio * sum;
+}
+
+void check_relaxation(const Case& c, const btr::Scene& scene, const btr::Packing& in, const btr::RelaxResult& r,
+                      const std::string& dir) {
+  EXPECT_EQ(r.stop_reason, "kinetic-energy") << "it should settle before max_time";
+  EXPECT_GT(r.simulated_time, 0.0);
+  EXPECT_LT(r.simulated_time, scene.relax.max_time);
+  const btr::Packing out = btr::read_packing(dir + "/relaxed.csv");  // ids 1..N in order, checked there
+  ASSERT_EQ(out.grains.size(), in.grains.size());
+  double moved = 0, z_in = 0, z_out = 0;
+  for (std::size_t i = 0; i < in.grains.size(); ++i) {
+    EXPECT_EQ(out.grains[i].r, in.grains[i].r);
+    EXPECT_EQ(out.grains[i].species, in.grains[i].species);
+    if (c.dimension == 2) EXPECT_EQ(out.grains[i].x.y(), 0.0) << "2D grains stay in y = 0";
+    moved = std::max(moved, (out.grains[i].x - in.grains[i].x).norm());
+    z_in += in.grains[i].x.z();
+    z_out += out.grains[i].x.z();
+  }
+  EXPECT_GT(moved, 0.05e-3) << "the grains started above their supports and must have fallen";
+  EXPECT_LT(z_out, z_in) << "the bed settles";
+  EXPECT_LT(largest_pair_overlap(out.grains, c.container, c.dimension), 0.01);
+  EXPECT_LT(largest_wall_overlap(out.grains, c.container, c.dimension), 0.01);
+  ASSERT_FALSE(r.kinetic_history.empty());
+  EXPECT_EQ(r.kinetic_history.front().first, 0.0);
+  EXPECT_LT(r.kinetic_history.back().second, threshold_by_hand(in.grains, scene));
+  EXPECT_EQ(out.meta["relax"]["stop_reason"], "kinetic-energy");
+  EXPECT_EQ(out.meta["relax"]["engine"], "yade");
+  // The floor carries the weight where there are no side walls to share it (static balance).
+  if (c.container.kind == ContainerKind::Open || c.container.kind == ContainerKind::Periodic) {
+    double floor = 0;
+    for (const auto& k : r.contacts)
+      if (k.j == 0) floor += k.fn;
+    const double weight = weight_of(in.grains, 2500);
+    EXPECT_NEAR(floor / weight, 1.0, 0.02) << "floor force " << floor << " N, weight " << weight << " N";
+  }
+  EXPECT_GT(static_cast<long>(r.contacts.size()), static_cast<long>(in.grains.size()) / 2);
+  // The script's own status agrees.
+  const auto status = nlohmann::json::parse(read_text(dir + "/" + btr::yade_files::kStatus));
+  EXPECT_EQ(status["status"], "ok");
+  EXPECT_EQ(status["stop_reason"], "kinetic-energy");
+  EXPECT_EQ(status["threads"], 1);
+}
+
+class YadeContainers : public ::testing::TestWithParam<Case> {};
+
+}  // namespace
+
+// Each script has exactly the container's walls (periodic cell instead of lateral walls), the 2D
+// constraint only in 2D, no rolling term unless asked, and is valid Python.
+TEST_P(YadeContainers, ScriptMatchesTheContainer) {
+  const Case c = GetParam();
+  const btr::Scene scene = btr_test::make_scene(c.name, c.dimension, c.container);
+  const btr::Packing p = btr_test::layered_packing(scene, c.grains, 7);
+  const std::string dir = btr_test::fresh_dir("yade_inputs_" + c.name);
+  const auto files = btr::export_inputs(p, scene, "yade", {}, dir);
+  ASSERT_EQ(files.size(), 2u);
+  const std::string script = read_text(dir + "/relax_yade.py");
+  EXPECT_EQ(walls_in_script(script), expected_walls(c)) << script.substr(script.find("def scene():"));
+  const std::string cell = line_starting(script, "    periodic_cell(");
+  if (c.container.kind == ContainerKind::Periodic) {
+    const std::string period_y = c.dimension == 3 ? g17(c.container.size_y) : "";
+    EXPECT_EQ(cell.rfind("    periodic_cell(" + g17(c.container.size_x) + ", " + period_y, 0), 0u) << cell;
+  } else {
+    EXPECT_EQ(cell, "");
+  }
+  EXPECT_EQ(line_starting(script, "DIMENSION = "), "DIMENSION = " + std::to_string(c.dimension));
+  EXPECT_EQ(line_starting(script, "MODEL = "), "MODEL = \"hertz\"");
+  EXPECT_EQ(line_starting(script, "    set_rolling("), "") << "no rolling term unless the scene sets one";
+  EXPECT_NE(script.find("damping=0.0"), std::string::npos) << "no numerical damping";
+  // The packing file: header and one line per grain, ids 1..N.
+  const std::string csv = read_text(dir + "/yade_packing.csv");
+  EXPECT_EQ(csv.rfind("id,x,y,z,radius,species\n1,", 0), 0u);
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), c.grains + 1);
+  EXPECT_NE(csv.find("\n" + std::to_string(c.grains) + ","), std::string::npos);
+  // Valid Python (parsed without importing yade).
+  const std::string cmd = "/usr/bin/python3 -c \"import ast,sys; ast.parse(open(sys.argv[1]).read())\" " + dir +
+                          "/relax_yade.py";
+  EXPECT_EQ(std::system(cmd.c_str()), 0);
+}
+
+TEST_P(YadeContainers, RelaxesToTheStopRule) {
+  if (!have_yade()) GTEST_SKIP() << "yade Python module not installed";
+  const Case c = GetParam();
+  // Open floors get rolling friction: a sphere rolling on a flat floor never stops otherwise.
+  btr::Scene scene = c.container.kind == ContainerKind::Open
+                         ? btr_test::settling_scene(c.name, c.dimension, c.container)
+                         : btr_test::make_scene(c.name, c.dimension, c.container);
+  // Softer than the fixture's 5e7 Pa: a 2.2x longer stable step keeps each run short; the static
+  // overlaps of these few layers stay far below 1% of the radius.
+  scene.grains.components[0].material.young = 1e7;
+  const btr::Packing p = btr_test::layered_packing(scene, c.grains, 11);
+  const std::string dir = btr_test::fresh_dir("yade_relax_" + c.name);
+  const btr::RelaxResult r = btr::relax(p, scene, "yade", {}, dir);
+  check_relaxation(c, scene, p, r, dir);
+  const auto status = nlohmann::json::parse(read_text(dir + "/" + btr::yade_files::kStatus));
+  std::cout << c.name << ": " << c.grains << " grains, stop at t = " << r.simulated_time << " s after "
+            << status["steps"] << " steps, wall " << r.wall_seconds << " s ("
+            << status["steps_per_second"].get<double>() << " steps/s)\n";
+}
+
+INSTANTIATE_TEST_SUITE_P(AllContainers, YadeContainers, ::testing::ValuesIn(all_cases()),
+                         [](const auto& info) { return info.param.name; });
+
+// btr runs the script by importing the yade module into /usr/bin/python3, never through the `yade`
+// launcher (which opens a Python console and an XML-RPC server on the network).
+TEST(Yade, CommandImportsTheModule) {
+  const auto adapter = btr::make_adapter("yade");
+  btr::RelaxSettings settings;
+  settings.np = 3;
+  const btr::EngineCommand cmd = adapter->command("/tmp/some run", settings);
+  ASSERT_EQ(cmd.argv.size(), 2u);
+  EXPECT_EQ(cmd.argv[0], "/usr/bin/python3");
+  EXPECT_EQ(cmd.argv[1], "/tmp/some run/relax_yade.py");
+  EXPECT_EQ(cmd.env.at("PYTHONPATH"), "/usr/lib/x86_64-linux-gnu/yade-double/py");
+  EXPECT_EQ(cmd.env.at("OMP_NUM_THREADS"), "3");
+  EXPECT_EQ(adapter->log_file("/tmp/x"), "/tmp/x/yade.log");
+}
+
+// Two species, linear contacts: the script's Young's moduli make YADE's kn = E r equal LIGGGHTS'
+// model hooke k_n (computed here from its formula), unlike pairs take the mean friction and
+// restitution, wall contacts the grain's; the run settles.
+TEST(Yade, HookeMixture) {
+  const Case c{"yade_mix", 3, container(ContainerKind::Box, 0.02, 0.02), 300};
+  btr::Scene scene = btr_test::make_scene("mix", 3, c.container);
+  btr::Component second = scene.grains.components[0];
+  second.species = 2;
+  second.material.young = 2e8;
+  second.material.friction = 0.3;
+  second.material.restitution = 0.7;
+  scene.grains.components.push_back(second);
+  scene.grains.components[0].fraction = scene.grains.components[1].fraction = 0.5;
+  scene.relax.model = "hooke";
+  const btr::Packing p = btr_test::layered_packing(scene, c.grains, 5, {1, 2});
+  const std::string dir = btr_test::fresh_dir("yade_mix");
+  btr::export_inputs(p, scene, "yade", {}, dir);
+  const std::string script = read_text(dir + "/relax_yade.py");
+
+  double d_max = 0;
+  for (const btr::Grain& q : p.grains) d_max = std::max(d_max, 2 * q.r);
+  const double v = std::sqrt(2 * 9.81 * d_max);
+  auto hooke_young = [&](double young, double nu) {  // k_n(r) / r for two grains of radius r = 1 mm
+    const double r = 1e-3, r_eff = r / 2, m_eff = 4.0 / 3.0 * M_PI * r * r * r * 2500 / 2;
+    const double y_eff = young / (2 * (1 - nu * nu));
+    return 16.0 / 15.0 * std::sqrt(r_eff) * y_eff *
+           std::pow(15 * m_eff * v * v / (16 * std::sqrt(r_eff) * y_eff), 0.2) / r;
+  };
+  std::smatch m;
+  const std::string s1 = line_starting(script, "    add_material(\"species1\"");
+  const std::string s2 = line_starting(script, "    add_material(\"species2\"");
+  const std::regex young(R"(young=([^,]+), poisson=([^,]+),)");
+  ASSERT_TRUE(std::regex_search(s1, m, young)) << s1;
+  EXPECT_NEAR(std::stod(m[1]), hooke_young(5e7, 0.3), 1e-9 * hooke_young(5e7, 0.3));
+  EXPECT_EQ(std::stod(m[2]), 1.0) << "ks = kn";
+  ASSERT_TRUE(std::regex_search(s2, m, young)) << s2;
+  EXPECT_NEAR(std::stod(m[1]), hooke_young(2e8, 0.3), 1e-9 * hooke_young(2e8, 0.3));
+  EXPECT_NE(script.find("    pair(\"species1\", \"species2\", restitution=0.59999999999999998, friction=0.40000000000000002)"),
+            std::string::npos);
+  EXPECT_NE(script.find("    pair(\"species2\", \"walls\", restitution=0.69999999999999996, friction=0.29999999999999999)"),
+            std::string::npos);
+  EXPECT_NE(script.find("    pair(\"species1\", \"walls\", restitution=0.5, friction=0.5)"), std::string::npos);
+
+  if (!have_yade()) GTEST_SKIP() << "yade Python module not installed";
+  const std::string run_dir = btr_test::fresh_dir("yade_mix_run");
+  const btr::RelaxResult r = btr::relax(p, scene, "yade", {}, run_dir);
+  check_relaxation(c, scene, p, r, run_dir);
+}
+
+// What YADE cannot do is refused before anything is written, naming the field.
+TEST(Yade, RollingFrictionWithTheLinearLawIsRefused) {
+  btr::Scene scene = btr_test::settling_scene("roll", 3, container(ContainerKind::Box, 0.02, 0.02));
+  scene.relax.model = "hooke";
+  const btr::Packing p = btr_test::layered_packing(scene, 50, 2);
+  const std::string dir = btr_test::fresh_dir("yade_roll");
+  try {
+    btr::export_inputs(p, scene, "yade", {}, dir);
+    FAIL() << "expected a refusal";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("rolling_friction"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir + "/relax_yade.py"));
+}
+
+// Rolling friction with Hertz-Mindlin: one moment law for all contacts.
+TEST(Yade, RollingFrictionUsesTheMindlinMomentLaw) {
+  const btr::Scene scene = btr_test::settling_scene("roll", 3, container(ContainerKind::Open));
+  const btr::Packing p = btr_test::layered_packing(scene, 50, 2);
+  const std::string dir = btr_test::fresh_dir("yade_roll_hertz");
+  btr::export_inputs(p, scene, "yade", {}, dir);
+  const std::string line = line_starting(read_text(dir + "/relax_yade.py"), "    set_rolling(");
+  EXPECT_NE(line.find("eta=0.050000000000000003"), std::string::npos) << line;  // mu_r / 2
+}
+
+namespace {
+
+// Writes the inputs for a small packing, lets `edit` break a file, runs them; returns the failure message.
+std::string run_broken(const std::string& name, const std::string& file,
+                       const std::function<std::string(std::string)>& edit) {
+  const btr::Scene scene = btr_test::make_scene(name, 3, container(ContainerKind::Box, 0.02, 0.02));
+  const btr::Packing p = btr_test::layered_packing(scene, 100, 9);
+  const std::string dir = btr_test::fresh_dir(name);
+  const auto adapter = btr::make_adapter("yade");
+  const btr::RelaxPlan plan = btr::make_plan(p, scene, {});
+  btr::write_engine_inputs(p, scene, *adapter, {}, plan, dir);
+  const std::string path = dir + "/" + file;
+  const std::string broken = edit(read_text(path));
+  std::ofstream(path) << broken;
+  std::string message;
+  try {
+    btr::run_engine_inputs(p, scene, *adapter, "yade", {}, plan, dir);
+    ADD_FAILURE() << "the broken run was accepted";
+  } catch (const btr::EngineFailure& e) {
+    message = e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir + "/relaxed.csv")) << "a failed run is never a result";
+  return message;
+}
+
+std::string replace_once(std::string s, const std::string& what, const std::string& with) {
+  const auto at = s.find(what);
+  EXPECT_NE(at, std::string::npos) << what;
+  return at == std::string::npos ? s : s.replace(at, what.size(), with);
+}
+
+}  // namespace
+
+TEST(Yade, BrokenPackingIsReported) {
+  if (!have_yade()) GTEST_SKIP() << "yade Python module not installed";
+  const std::string msg = run_broken("yade_broken_packing", "yade_packing.csv", [](std::string s) {
+    const auto line3 = s.find("\n3,");
+    return s.replace(line3 + 1, s.find(',', line3 + 3) - line3 - 1, "3,not-a-number");
+  });
+  EXPECT_NE(msg.find("yade_packing.csv line 4"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("last lines of"), std::string::npos) << msg;
+}
+
+TEST(Yade, BrokenScriptIsReported) {
+  if (!have_yade()) GTEST_SKIP() << "yade Python module not installed";
+  const std::string msg = run_broken("yade_broken_script", "relax_yade.py",
+                                     [](std::string s) { return replace_once(s, "    add_grains(", "    add_grainz("); });
+  EXPECT_NE(msg.find("NameError"), std::string::npos) << msg;
+}
+
+TEST(Yade, BlowUpIsAFailure) {
+  if (!have_yade()) GTEST_SKIP() << "yade Python module not installed";
+  // 40 times the stable step: Hertz contacts gain energy at every collision.
+  const std::string msg = run_broken("yade_blowup", "relax_yade.py", [](std::string s) {
+    const std::string line = line_starting(s, "TIMESTEP = ");
+    const double dt = std::stod(line.substr(11));
+    return replace_once(s, line, "TIMESTEP = " + g17(40 * dt));
+  });
+  EXPECT_TRUE(msg.find("blow-up") != std::string::npos || msg.find("fell through the floor") != std::string::npos ||
+              msg.find("left the container") != std::string::npos || msg.find("outside the container") != std::string::npos)
+      << msg;
+}
+
+// Without its floor the bed falls forever: the run reports grains below the floor.
+TEST(Yade, GrainsLeavingTheContainerAreAFailure) {
+  if (!have_yade()) GTEST_SKIP() << "yade Python module not installed";
+  const std::string msg = run_broken("yade_no_floor", "relax_yade.py", [](std::string s) {
+    s = replace_once(s, "    add_plane(axis=2, position=0)  # floor", "    pass  # floor removed");
+    const std::string checks = line_starting(s, "MAX_CHECKS = ");
+    return replace_once(s, checks, "MAX_CHECKS = 5");  // the lowest grains fall below z = 0, the bound is not reached
+  });
+  EXPECT_NE(msg.find("fell through the floor"), std::string::npos) << msg;
+}
+
+// read_back alone: no status means the script did not finish; outputs that contradict the
+// container or the packing are failures, whatever the status says.
+TEST(Yade, ReadBackRejectsMissingAndBadOutputs) {
+  const btr::Scene scene = btr_test::make_scene("rb", 3, container(ContainerKind::Box, 0.02, 0.02));
+  const btr::Packing p = btr_test::layered_packing(scene, 3, 1);
+  const auto adapter = btr::make_adapter("yade");
+  btr::RelaxPlan plan;
+  plan.timestep = 1e-6;
+  plan.max_time = 0.1;
+  plan.kinetic_threshold = 1e-9;
+  const std::string dir = btr_test::fresh_dir("yade_read_back");
+  auto expect_failure = [&](const std::string& needle) {
+    try {
+      adapter->read_back(dir, p, scene, plan);
+      ADD_FAILURE() << "accepted; expected a failure mentioning " << needle;
+    } catch (const btr::EngineFailure& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  expect_failure("no status file");
+
+  std::ofstream(dir + "/yade_status.json") << R"({"status": "ok", "stop_reason": "kinetic-energy", "time": 0.05,
+                                                  "steps": 50000, "wall_seconds": 1.0})";
+  expect_failure("missing output");
+
+  auto final_rows = [&](double x_of_grain_2) {
+    std::ofstream f(dir + "/yade_final.csv");
+    f << "id,x,y,z,vx,vy,vz\n";
+    for (std::size_t i = 0; i < p.grains.size(); ++i)
+      f << i + 1 << "," << g17(i == 1 ? x_of_grain_2 : 0.0) << ",0," << g17(p.grains[i].r) << ",0,0,0\n";
+  };
+  std::ofstream(dir + "/yade_kinetic.csv") << "time,kinetic_energy\n0,0\n0.05,1e-12\n";
+  std::ofstream(dir + "/yade_contacts.csv") << "i,j,fn,overlap\n1,0,1e-4,1e-7\n";
+  final_rows(0.011);  // beyond the wall x = +0.01
+  expect_failure("grain 2 left the container");
+  final_rows(0.0);
+  const btr::RelaxResult ok = adapter->read_back(dir, p, scene, plan);
+  EXPECT_EQ(ok.stop_reason, "kinetic-energy");
+  EXPECT_EQ(ok.relaxed.grains.size(), 3u);
+  ASSERT_EQ(ok.contacts.size(), 1u);
+  EXPECT_EQ(ok.contacts[0].j, 0);
+  EXPECT_EQ(ok.kinetic_history.size(), 2u);
+
+  std::ofstream(dir + "/yade_kinetic.csv") << "time,kinetic_energy\n0,0\n0.05,nan\n";
+  expect_failure("non-finite");
+  std::ofstream(dir + "/yade_kinetic.csv") << "time,kinetic_energy\n0,0\n0.05,1e-6\n";
+  expect_failure("is not below the threshold");
+  std::ofstream(dir + "/yade_kinetic.csv") << "time,kinetic_energy\n0,0\n0.05,1e-12\n";
+  {
+    std::ofstream f(dir + "/yade_final.csv");
+    f << "id,x,y,z,vx,vy,vz\n1,0,0,0.001,0,0,0\n2,0,0,0.001,0,0,0\n";  // grain 3 lost
+  }
+  expect_failure("lost grains");
+  std::ofstream(dir + "/yade_status.json") << R"({"status": "failed", "message": "something broke"})";
+  expect_failure("something broke");
+}
