@@ -38,7 +38,8 @@ def pair(tmp_path):
 def test_compare_outputs_and_numbers(tmp_path, pair):
     pre, post, moved, n = pair
     out = tmp_path / "cmp"
-    res = compare(pre, post, str(out), progress=lambda m: None)
+    # reach 2.1 d: no FCC neighbour shell lies there (d, 1.41 d, 1.73 d, 2 d, 2.24 d), so no ties
+    res = compare(pre, post, str(out), progress=lambda m: None, local_reach_d=2.1)
     expected = np.full(n, 0.3)
     expected[moved] = np.hypot(0.3, 0.4)
     st = res["displacement_d"]
@@ -59,7 +60,20 @@ def test_compare_outputs_and_numbers(tmp_path, pair):
     assert np.allclose(vtp["displacement"], expected)
     assert np.allclose(vtp["radius"], 1e-3)
     rows = (out / "per_grain.csv").read_text().splitlines()
-    assert len(rows) == n + 1 and rows[0].startswith("id,displacement_d,n_supports")
+    assert len(rows) == n + 1 and rows[0].startswith("id,displacement_d,local_displacement_d,n_supports")
+    # local displacement: the shared shift cancels; what is left is the rise against the neighbourhood
+    # (grains within 2.1 d, the grain itself included), brute force with the nearest periodic image
+    pre_pos = np.genfromtxt(pre, delimiter=",", skip_header=1)[:, 1:4]
+    L = 5 * np.sqrt(2) * 2e-3
+    raised = np.zeros(n, bool)
+    raised[moved] = True
+    expected_local = np.empty(n)
+    for i in range(n):
+        delta = pre_pos - pre_pos[i]
+        delta[:, :2] -= L * np.round(delta[:, :2] / L)
+        near = np.linalg.norm(delta, axis=1) <= 2.1 * 2e-3
+        expected_local[i] = 0.4 * abs(raised[i] - raised[near].mean())
+    assert np.allclose(vtp["local_displacement"], expected_local, atol=1e-9)
 
 
 def test_compare_refuses_different_ids(tmp_path, pair):

@@ -18,6 +18,7 @@ from .io import InputError, Packing, atomic_write_text, read_packing, read_scene
 from .support import KIND_LABEL, KIND_ORDER, btr_supports
 
 THRESHOLDS = (0.1, 0.5)
+LOCAL_REACH_D = 2.0  # neighbourhood of the local (relative) displacement, in mean diameters
 
 
 def load_context(pre: Packing, scene_path: str | None):
@@ -136,7 +137,7 @@ def read_kinetic(path: str):
 
 def compare(pre_path: str, post_path: str, outdir: str, scene_path: str | None = None,
             window: metrics.Window = metrics.Window(), tol: float = metrics.CONTACT_TOLERANCE,
-            progress=print) -> dict:
+            progress=print, local_reach_d: float = LOCAL_REACH_D) -> dict:
     out = Path(outdir)
     (out / "figures").mkdir(parents=True, exist_ok=True)
     pre = read_packing(pre_path)
@@ -150,6 +151,8 @@ def compare(pre_path: str, post_path: str, outdir: str, scene_path: str | None =
     disp_vec = metrics.displacement(pre.pos, post.pos, container)
     disp_d = np.linalg.norm(disp_vec, axis=1) / d
     stats = metrics.displacement_stats(disp_d, THRESHOLDS)
+    local_d = metrics.local_displacement(pre.pos, disp_vec, container, local_reach_d * d) / d
+    stats_local = metrics.displacement_stats(local_d, THRESHOLDS)
 
     progress("compare: structure of PRE")
     s_pre = metrics.structure(pre.pos, pre.radius, pre.species, container, d, window, heap, tol)
@@ -162,7 +165,8 @@ def compare(pre_path: str, post_path: str, outdir: str, scene_path: str | None =
     height_d = pre.pos[:, 2] / d
     wall_d = container.wall_distance(pre.pos) / d
     surface_d = bulk_pre.surface_distance() / d
-    nonphys = nonphysical(sup, disp_d, height_d, wall_d, surface_d, container.dimension)
+    nonphys = {"absolute": nonphysical(sup, disp_d, height_d, wall_d, surface_d, container.dimension),
+               "local": nonphysical(sup, local_d, height_d, wall_d, surface_d, container.dimension)}
 
     def delta(a, b):
         return None if a is None or b is None else b - a
@@ -178,17 +182,19 @@ def compare(pre_path: str, post_path: str, outdir: str, scene_path: str | None =
     }
 
     progress("compare: figures and VTK files")
-    figs = _figures(out / "figures", disp_d, height_d, nonphys, s_pre, s_post, post_path)
-    point_data = {"displacement": disp_d, "displacement_vector": disp_vec, "moved": (disp_d > THRESHOLDS[0]) * 1.0,
+    figs = _figures(out / "figures", disp_d, local_d, height_d, s_pre, s_post, post_path)
+    point_data = {"displacement": disp_d, "local_displacement": local_d, "displacement_vector": disp_vec,
+                  "moved": (disp_d > THRESHOLDS[0]) * 1.0, "moved_locally": (local_d > THRESHOLDS[0]) * 1.0,
                   "n_supports": sup["n_supports"], "edge_distance": sup["edge_distance"]}
     write_vtp(out / "pre_displacement.vtp", pre, point_data)
     write_vtp(out / "post_displacement.vtp", post, point_data)
-    _write_per_grain(out / "per_grain.csv", pre, disp_d, sup, height_d, wall_d, surface_d)
+    _write_per_grain(out / "per_grain.csv", pre, disp_d, local_d, sup, height_d, wall_d, surface_d)
 
     result = {"pre": os.path.abspath(pre_path), "post": os.path.abspath(post_path),
               "scene": os.path.abspath(scene_path) if scene_path else None,
               "dimension": container.dimension, "container": container.__dict__, "heap_axis": heap,
-              "mean_diameter": d, "displacement_d": stats, "structure": {"pre": s_pre, "post": s_post},
+              "mean_diameter": d, "displacement_d": stats, "local_displacement_d": stats_local,
+              "local_reach_d": local_reach_d, "structure": {"pre": s_pre, "post": s_post},
               "changes": changes, "nonphysical": nonphys,
               "files": dict(figs, compare_md=str(out / "compare.md"), per_grain=str(out / "per_grain.csv"),
                             pre_vtp=str(out / "pre_displacement.vtp"), post_vtp=str(out / "post_displacement.vtp"))}
@@ -198,10 +204,11 @@ def compare(pre_path: str, post_path: str, outdir: str, scene_path: str | None =
     return result
 
 
-def _figures(figdir: Path, disp_d, height_d, nonphys, s_pre, s_post, post_path) -> dict:
-    figs = {"displacement_histogram": report.displacement_histogram(disp_d, figdir / "displacement_histogram.png"),
+def _figures(figdir: Path, disp_d, local_d, height_d, s_pre, s_post, post_path) -> dict:
+    figs = {"displacement_histogram": report.displacement_histogram(disp_d, figdir / "displacement_histogram.png",
+                                                                    local=local_d),
             "displacement_vs_height": report.displacement_vs_height(height_d, disp_d, figdir / "displacement_vs_height.png",
-                                                                    disp_d > THRESHOLDS[0])}
+                                                                    disp_d > THRESHOLDS[0], local=local_d)}
     figs["rdf"] = report.curves(figdir / "rdf.png", [("BTR (pre)", s_pre["rdf"]["r_over_d"], s_pre["rdf"]["g"]),
                                                      ("relaxed (post)", s_post["rdf"]["r_over_d"], s_post["rdf"]["g"])],
                                 "r / mean diameter", "g(r)", "Radial distribution function (bulk window)")
@@ -221,11 +228,11 @@ def _figures(figdir: Path, disp_d, height_d, nonphys, s_pre, s_post, post_path) 
     return figs
 
 
-def _write_per_grain(path, pre, disp_d, sup, height_d, wall_d, surface_d):
-    rows = ["id,displacement_d,n_supports,support_kind,edge_distance_r,offset_r,load,height_d,wall_distance_d,"
+def _write_per_grain(path, pre, disp_d, local_d, sup, height_d, wall_d, surface_d):
+    rows = ["id,displacement_d,local_displacement_d,n_supports,support_kind,edge_distance_r,offset_r,load,height_d,wall_distance_d,"
             "surface_distance_d"]
     for k in range(len(pre)):
-        rows.append(",".join([str(int(pre.ids[k])), f"{disp_d[k]:.9g}", str(int(sup["n_supports"][k])),
+        rows.append(",".join([str(int(pre.ids[k])), f"{disp_d[k]:.9g}", f"{local_d[k]:.9g}", str(int(sup["n_supports"][k])),
                               sup["kind"][k], f"{sup['edge_distance'][k]:.6g}", f"{sup['offset'][k]:.6g}",
                               str(int(sup["load"][k])), f"{height_d[k]:.6g}", f"{wall_d[k]:.6g}",
                               f"{surface_d[k]:.6g}"]))
@@ -266,14 +273,30 @@ def markdown(res: dict) -> str:
         lines += ["## Contact-number distribution (bulk, fraction of grains)", "",
                   report.md_table(["contacts"] + ks, [["pre"] + [dp.get(k, 0.0) for k in ks],
                                                       ["post"] + [dq.get(k, 0.0) for k in ks]])]
-    npx = res["nonphysical"]
-    lines += ["## Nonphysical BTR configurations (grains DEM moved)", "",
-              f"{npx['n_moved_0.1']} grains ({report.fmt(100 * npx['moved_0.1'], 3)} %) moved more than 0.1 d and "
-              f"{report.fmt(100 * npx['moved_0.5'], 3)} % more than 0.5 d. Edge distance: {npx['edge_distance_note']}.",
-              ""]
+    lt = res["local_displacement_d"]
+    lines += [f"Local displacement (the displacement minus the mean of the grains within {res['local_reach_d']:g} d, "
+              "which removes settling of the bed as a whole, e.g. elastic compression):", "",
+              report.md_table(["mean", "median", "95th percentile", "max", "fraction > 0.1 d", "fraction > 0.5 d"],
+                              [[lt["mean"], lt["median"], lt["p95"], lt["max"], lt["fraction_above_0.1"],
+                                lt["fraction_above_0.5"]]])]
+    lines += _nonphysical_md(res["nonphysical"]["local"], "by local displacement")
+    lines += _nonphysical_md(res["nonphysical"]["absolute"], "by displacement")
+    lines += ["## Figures", ""]
+    for k, v in res["files"].items():
+        if v.endswith(".png"):
+            lines.append(f"![{k}](figures/{os.path.basename(v)})")
+    lines += ["", "ParaView: open pre_displacement.vtp (BTR positions) or post_displacement.vtp (relaxed), apply a "
+              "Glyph filter (sphere, scale by 'radius', factor 2 for diameter) and colour by 'displacement'.", ""]
+    return "\n".join(lines)
+
+
+def _nonphysical_md(npx: dict, which: str) -> list:
+    lines = [f"## Nonphysical BTR configurations: grains DEM moved ({which})", "",
+             f"{npx['n_moved_0.1']} grains ({report.fmt(100 * npx['moved_0.1'], 3)} %) moved more than 0.1 d and "
+             f"{report.fmt(100 * npx['moved_0.5'], 3)} % more than 0.5 d. Edge distance: {npx['edge_distance_note']}.",
+             ""]
     if npx["rejected"]:
-        lines.append("Configurations DEM rejects (moving at least twice as often as the packing as a whole):")
-        lines.append("")
+        lines += ["Configurations DEM rejects (moving at least twice as often as the packing as a whole):", ""]
         for f in npx["rejected"]:
             lines.append(f"- {f['table'].replace('by_', '').replace('_', ' ')} {f['bin']}: {f['grains']} grains, "
                          f"{report.fmt(100 * f['moved_0.1'], 3)} % moved > 0.1 d")
@@ -293,13 +316,7 @@ def markdown(res: dict) -> str:
         lines += [f"By {title}:", "", report.md_table(["bin", "grains", "moved > 0.1 d", "moved > 0.5 d"],
                                                       [[r["bin"], r["grains"], r["moved_0.1"], r["moved_0.5"]]
                                                        for r in rows])]
-    med = npx["medians"]
     lines += ["Medians, grains moved > 0.1 d vs the others:", "",
-              report.md_table(["quantity", "moved", "stayed"], [[k, v["moved"], v["stayed"]] for k, v in med.items()])]
-    lines += ["## Figures", ""]
-    for k, v in res["files"].items():
-        if v.endswith(".png"):
-            lines.append(f"![{k}](figures/{os.path.basename(v)})")
-    lines += ["", "ParaView: open pre_displacement.vtp (BTR positions) or post_displacement.vtp (relaxed), apply a "
-              "Glyph filter (sphere, scale by 'radius', factor 2 for diameter) and colour by 'displacement'.", ""]
-    return "\n".join(lines)
+              report.md_table(["quantity", "moved", "stayed"],
+                              [[k, v["moved"], v["stayed"]] for k, v in npx["medians"].items()])]
+    return lines

@@ -41,6 +41,19 @@ def displacement(pre_pos: np.ndarray, post_pos: np.ndarray, container: Container
     return container.minimum_image_xyz(post_pos - pre_pos)
 
 
+def local_displacement(pre_pos: np.ndarray, disp: np.ndarray, container: Container, reach: float) -> np.ndarray:
+    """|u_i - mean of u_j over the grains j within `reach` of grain i (pre positions, i included)|:
+    the part of a grain's displacement its neighbourhood did not share. A bed settling as a whole
+    (elastic compression, a rigid shift) has large displacements but small local ones."""
+    coords = container.coords(pre_pos)
+    tree = _tree(coords, container)
+    lists = tree.query_ball_point(container.wrap(coords), reach, return_sorted=False)
+    out = np.empty(len(disp))
+    for i, nb in enumerate(lists):
+        out[i] = np.linalg.norm(disp[i] - disp[nb].mean(axis=0))
+    return out
+
+
 def displacement_stats(disp_d: np.ndarray, thresholds=(0.1, 0.5)) -> dict:
     """Per-grain displacement magnitudes in mean diameters -> summary."""
     if len(disp_d) == 0:
@@ -259,12 +272,18 @@ def rdf(bulk: Bulk, mask: np.ndarray, volume: float, r_max_d: float = 3.0, bin_d
     return centres, counts / (nb * density * shell)
 
 
-def rdf_distance(g1, g2, r_d, r_min_d: float = 0.5) -> float | None:
-    """RMS difference of two g(r) on the same bins, over r >= r_min_d."""
+def rdf_distance(g1, g2, r_d, r_min_d: float = 0.5, coarsen: int = 5) -> float | None:
+    """RMS difference of two g(r) on the same bins, over r >= r_min_d, after merging `coarsen`
+    neighbouring bins (0.1 d with the default 0.02 d bins: the fine bins of a small packing are noise)."""
     if g1 is None or g2 is None:
         return None
     sel = np.asarray(r_d) >= r_min_d
-    return float(np.sqrt(np.mean((np.asarray(g1)[sel] - np.asarray(g2)[sel]) ** 2)))
+    a, b = np.asarray(g1)[sel], np.asarray(g2)[sel]
+    n = (len(a) // coarsen) * coarsen
+    if n == 0:
+        return None
+    a, b = a[:n].reshape(-1, coarsen).mean(axis=1), b[:n].reshape(-1, coarsen).mean(axis=1)
+    return float(np.sqrt(np.mean((a - b) ** 2)))
 
 
 # ---- free-surface profile and angle of repose ----------------------------------------------------

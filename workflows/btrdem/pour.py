@@ -336,6 +336,28 @@ def read_dump(path: Path, n: int):
     return {c: data[:, k] for k, c in enumerate(cols)}
 
 
+def _pour_status(log: Path) -> str:
+    """'batch k/n, t = ... s' from the end of the LIGGGHTS log, for progress lines."""
+    try:
+        with open(log, "rb") as f:
+            f.seek(0, os.SEEK_END)
+            f.seek(max(0, f.tell() - 65536))
+            lines = f.read().decode(errors="replace").splitlines()
+    except OSError:
+        return ""
+    batch = next((line.split()[1:3] for line in reversed(lines) if line.startswith("BTR_BATCH")), None)
+    t = None
+    for line in reversed(lines):
+        parts = line.split()
+        if len(parts) >= 4 and parts[0].isdigit():
+            t = parts[1]
+            break
+    where = f"batch {batch[0]}/{batch[1]}" if batch else "starting"
+    if batch and batch[0] == batch[1] and "label settle" not in lines:
+        where += " (or settling)"
+    return where + (f", t = {float(t):.3g} s" if t else "")
+
+
 def _log_marks(log: Path):
     stop, final = None, None
     try:
@@ -372,7 +394,7 @@ def pour(btr: Packing, outdir: str | os.PathLike, settings: PourSettings = PourS
     if shutil.which(argv[0]) is None:
         raise PourFailure(f"pour: {argv[0]} not found on PATH (Debian package liggghts / openmpi-bin)")
     res = run_command(argv, out, settings.label, progress=progress, env=env, watch=str(out / "log.liggghts"),
-                      timeout=settings.wall_time_limit)
+                      timeout=settings.wall_time_limit, status=lambda: _pour_status(out / "log.liggghts"))
     log = out / "log.liggghts"
     if res["returncode"] != 0:
         tail = "".join(open(log, errors="replace").readlines()[-12:]) if log.exists() else ""

@@ -54,16 +54,22 @@ def save_figure(fig, path) -> str:
     return str(path)
 
 
-def displacement_histogram(disp_d, path, thresholds=(0.1, 0.5)):
+def displacement_histogram(disp_d, path, thresholds=(0.1, 0.5), local=None):
     fig, ax = plt.subplots(figsize=(6, 4))
     disp_d = np.asarray(disp_d)
-    positive = disp_d[disp_d > 0]
+    both = np.concatenate([disp_d, np.asarray(local)]) if local is not None else disp_d
+    positive = both[both > 0]
     if len(positive):
         lo = max(float(positive.min()), 1e-6)
-        hi = max(float(disp_d.max()), lo * 10)
+        hi = max(float(positive.max()), lo * 10)
         bins = np.logspace(np.log10(lo), np.log10(hi), 50)
-        ax.hist(positive, bins=bins, color="tab:blue")
+        ax.hist(disp_d[disp_d > 0], bins=bins, color="tab:blue", label="displacement")
+        if local is not None:
+            loc = np.asarray(local)
+            ax.hist(loc[loc > 0], bins=bins, histtype="step", color="black", lw=1.5,
+                    label="local displacement (neighbourhood mean removed)")
         ax.set_xscale("log")
+        ax.legend(fontsize=8, loc="upper left")
     for t in thresholds:
         ax.axvline(t, color="tab:red", ls="--", lw=1)
         ax.text(t, ax.get_ylim()[1] * 0.95, f" {t:g} d", color="tab:red", va="top", fontsize=8)
@@ -73,12 +79,15 @@ def displacement_histogram(disp_d, path, thresholds=(0.1, 0.5)):
     return save_figure(fig, path)
 
 
-def displacement_vs_height(height_d, disp_d, path, moved=None):
+def displacement_vs_height(height_d, disp_d, path, moved=None, local=None):
     fig, ax = plt.subplots(figsize=(6, 4))
-    ax.scatter(height_d, np.maximum(disp_d, 1e-8), s=3, alpha=0.5, color="tab:blue", label="grains")
+    ax.scatter(height_d, np.maximum(disp_d, 1e-8), s=3, alpha=0.5, color="tab:blue", label="displacement")
     if moved is not None and np.any(moved):
         ax.scatter(np.asarray(height_d)[moved], np.maximum(np.asarray(disp_d)[moved], 1e-8), s=5,
-                   color="tab:red", label="moved > 0.1 d")
+                   color="tab:red", label="displacement > 0.1 d")
+    if local is not None:
+        ax.scatter(height_d, np.maximum(local, 1e-8), s=2, alpha=0.5, color="black", marker="x",
+                   label="local displacement")
     ax.set_yscale("log")
     ax.axhline(0.1, color="gray", ls="--", lw=1)
     ax.set_xlabel("BTR height of centre / mean diameter")
@@ -103,5 +112,8 @@ def curves(path, series, xlabel, ylabel, title="", logx=False, logy=False, style
     ax.set_ylabel(ylabel)
     if title:
         ax.set_title(title)
-    ax.legend(loc="best", fontsize=8)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(loc="best", fontsize=8)
+    else:
+        ax.text(0.5, 0.5, "no data (empty bulk window?)", transform=ax.transAxes, ha="center", va="center")
     return save_figure(fig, path)

@@ -16,7 +16,7 @@ import sys
 import time
 from pathlib import Path
 
-from .io import read_json, write_json
+from .io import InputError, read_json, write_json
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -61,9 +61,11 @@ def _last_line(path) -> str:
 
 
 def run_command(argv, cwd, label: str, progress=print, heartbeat: float = 15.0, env: dict | None = None,
-                watch: str | None = None, timeout: float | None = None, stdout_name: str | None = None) -> dict:
+                watch: str | None = None, timeout: float | None = None, stdout_name: str | None = None,
+                status=None) -> dict:
     """Runs argv in cwd with stdout and stderr in cwd/<label>.stdout / .stderr, printing a progress line
-    every `heartbeat` seconds (with the last line of `watch`, a log file the program writes).
+    every `heartbeat` seconds (with status() if given, else the last line of `watch`, a log file the
+    program writes).
     Returns {returncode, wall_seconds, stdout, stderr}; never raises on a non-zero exit."""
     cwd = Path(cwd)
     cwd.mkdir(parents=True, exist_ok=True)
@@ -90,7 +92,10 @@ def run_command(argv, cwd, label: str, progress=print, heartbeat: float = 15.0, 
                     proc.wait()
                     raise StepFailed(f"{label}: killed after {timeout:.0f} s (time limit)")
                 if now >= next_beat:
-                    last = _last_line(watch) if watch else _last_line(out_path) or _last_line(err_path)
+                    if status is not None:
+                        last = status()
+                    else:
+                        last = _last_line(watch) if watch else _last_line(out_path) or _last_line(err_path)
                     progress(f"  [{label}] running {now - t0:.0f} s{': ' + last if last else ''}")
                     next_beat = now + heartbeat
     return {"returncode": rc, "wall_seconds": time.monotonic() - t0, "stdout": str(out_path), "stderr": str(err_path)}
@@ -178,10 +183,10 @@ class RunRecord:
             self.data["status"] = "failed"
             self.data["failed_step"] = name
             self.save()
+            if isinstance(e, (KeyboardInterrupt, InputError)):
+                raise
             if isinstance(e, StepFailed):
-                raise
-            if isinstance(e, KeyboardInterrupt):
-                raise
+                raise StepFailed(f"{name}: {e}") from e
             raise StepFailed(f"{name}: {type(e).__name__}: {e}") from e
         entry.update(status="ok", wall_seconds=time.monotonic() - t0)
         self.save()

@@ -1,0 +1,65 @@
+"""The LIGGGHTS reference pour: grains end at rest inside the container, as a random packing."""
+import numpy as np
+import pytest
+
+from btrdem import metrics
+from btrdem.io import read_packing
+from btrdem.pour import PourFailure, PourSettings, initial_lattice, pour
+from btrdem.geometry import Container
+from scenes import grains_packing, scene_json
+
+
+def quiet(msg):
+    pass
+
+
+def test_pour_into_a_box_is_a_random_packing_at_rest(tmp_path, liggghts):
+    scene = scene_json("box", 3, size=0.012, count=220, max_time=0.15)
+    btr = read_packing(grains_packing(tmp_path / "btr", scene))
+    s = pour(btr, tmp_path / "pour", PourSettings(seed=2), quiet)
+    q = read_packing(s["packing"])
+    assert np.array_equal(q.ids, btr.ids) and np.allclose(q.radius, btr.radius)
+    c = q.container()
+    assert np.all(c.wall_distance(q.pos) >= q.radius * 0.97)          # inside the walls
+    assert np.all(q.pos[:, 2] >= q.radius * 0.97)                     # above the floor
+    pairs, dist = metrics.contact_pairs(q.pos, q.radius, c, tol=0.0)
+    overlap = (q.radius[pairs[:, 0]] + q.radius[pairs[:, 1]] - dist) / np.minimum(q.radius[pairs[:, 0]],
+                                                                                  q.radius[pairs[:, 1]])
+    assert overlap.max() < 0.05
+    st = metrics.structure(q.pos, q.radius, q.species, c, window=metrics.Window(1.5, 1.5, 1.5))
+    # a poured frictional packing lies between random loose and random close packing
+    assert 0.53 < st["packing_fraction"] < 0.66
+    assert 4.0 < st["coordination"]["mean"] < 7.5
+    kin = np.genfromtxt(tmp_path / "pour" / "kinetic.csv", delimiter=",", skip_header=1)
+    assert kin[-1, 1] < 1e-3 * kin[:, 1].max()                        # came to rest
+    assert s["stop_reason"] in ("kinetic-energy", "max-time")
+    assert (tmp_path / "pour" / "in.pour").exists() and (tmp_path / "pour" / "log.liggghts").exists()
+
+
+def test_two_dimensional_pour_stays_in_the_plane(tmp_path, liggghts):
+    scene = scene_json("box", 2, size=0.02, count=60, max_time=0.1)
+    btr = read_packing(grains_packing(tmp_path / "btr", scene))
+    s = pour(btr, tmp_path / "pour", PourSettings(seed=1), quiet)
+    q = read_packing(s["packing"])
+    assert np.all(q.pos[:, 1] == 0.0)
+    assert np.all(np.abs(q.pos[:, 0]) <= 0.01 - q.radius * 0.97)
+    # disks at rest form at least one layer on the floor: the lowest centres sit at their radius
+    assert np.min(q.pos[:, 2] - q.radius) > -0.03 * q.radius.min()
+
+
+def test_lattice_holds_every_grain_in_id_order_without_overlap():
+    scene = scene_json("cylinder", 3, radius=0.01, count=500)
+    r = np.random.default_rng(1).uniform(0.8e-3, 1.2e-3, 500)
+    pos, batches, info = initial_lattice(r, Container("cylinder", 3, radius=0.01), scene, 7, 0.05, 10)
+    assert np.all(np.hypot(pos[:, 0], pos[:, 1]) <= 0.01 - r)
+    assert np.all(np.diff(np.round((pos[:, 2] - 0.05) / info["spacing"])) >= 0)  # ids fill layers bottom-up
+    from scipy.spatial.distance import pdist
+    assert pdist(pos).min() > 2 * r.max()
+    assert batches[0][0] == 0 and batches[-1][1] == 499 and len(batches) <= 10
+
+
+def test_rain_on_an_open_floor_is_refused(tmp_path):
+    scene = scene_json("open", 3, count=10)
+    btr = read_packing(grains_packing(tmp_path / "btr", scene))
+    with pytest.raises(PourFailure, match="rain source needs a container footprint"):
+        pour(btr, tmp_path / "pour", PourSettings(), quiet)

@@ -1,0 +1,73 @@
+"""error-vs-runtime and stability on tiny settings: complete tables, no empty cells."""
+import json
+import re
+import subprocess
+import sys
+
+import pytest
+
+from scenes import tiny_bed_toml
+
+
+def table_rows(md: str, header_start: str):
+    """Rows (lists of cells) of the Markdown table whose header starts with header_start."""
+    lines = md.splitlines()
+    k = next(i for i, l in enumerate(lines) if l.startswith("| " + header_start))
+    rows = []
+    for line in lines[k + 2:]:
+        if not line.startswith("|"):
+            break
+        rows.append([c.strip() for c in line.strip("|").split("|")])
+    return lines[k], rows
+
+
+def run(args, source_dir, timeout=600):
+    return subprocess.run([sys.executable, str(source_dir / "workflows" / "btr_workflow.py")] + args,
+                          capture_output=True, text=True, timeout=timeout)
+
+
+def test_error_vs_runtime_tiny(tmp_path, source_dir, btr_binary, liggghts):
+    scene = tiny_bed_toml(tmp_path / "evr.toml", count=150, max_time=0.04)
+    out = tmp_path / "evr"
+    p = run(["error-vs-runtime", scene, "-o", str(out), "--relax-times", "0.005,0.04", "--pours", "0.3:1e-3,1:1e-5"],
+            source_dir)
+    assert p.returncode == 0, p.stdout + p.stderr
+    res = json.loads((out / "error_vs_runtime.json").read_text())
+    assert res["reference"]["seeds"] == [1, 2, 3]
+    assert {"packing_fraction", "coordination", "rdf"} <= set(res["measures"])
+    methods = [r["method"] for r in res["rows"]]
+    assert methods[0] == "BTR" and sum(m.startswith("BTR + liggghts relax") for m in methods) == 2
+    assert sum(m.startswith("DEM pour") for m in methods) == 2
+    for r in res["rows"]:
+        assert r["wall_seconds"] > 0
+        assert all(r["errors"][k] is not None and r["errors"][k] >= 0 for k in res["measures"])
+    # the BTR + relaxation rows include the deposit's wall time
+    btr_wall = res["rows"][0]["wall_seconds"]
+    assert all(r["wall_seconds"] > btr_wall for r in res["rows"] if r["kind"] == "relax")
+    md = (out / "error_vs_runtime.md").read_text()
+    header, rows = table_rows(md, "method | wall time [s] | error:")
+    assert len(rows) == 3 + 5
+    assert all(cell not in ("", "n/a", "None", "nan") for row in rows for cell in row), rows
+    assert res["verdict"]["summary"] in md
+    assert (out / "error_vs_runtime.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_stability_tiny(tmp_path, source_dir, btr_binary, liggghts, yade):
+    out = tmp_path / "stab"
+    p = run(["stability", "--tiny", "-o", str(out)], source_dir, timeout=800)
+    assert p.returncode == 0, p.stdout + p.stderr
+    res = json.loads((out / "stability.json").read_text())
+    cases = {(r["case"], r["engine"]) for r in res["cases"]}
+    assert len(cases) == len(res["cases"]) == 2 * 14  # base + 2 values x 6 parameters + 1 refused step, 2 engines
+    for r in res["cases"]:
+        assert r["status"] in ("pass", "fail", "refused")
+        assert (r["status"] == "pass") == (r["reason"] == ""), r
+        assert r["wall_seconds"] >= 0
+    # an explicit step twice the stable one must be refused by the coupling, in both engines
+    assert all(r["status"] == "refused" for r in res["cases"] if r["parameter"] == "timestep_x")
+    md = (out / "stability.md").read_text()
+    header, rows = table_rows(md, "case | engine | status")
+    assert len(rows) == len(res["cases"])
+    assert all(cell != "" for row in rows for cell in row)
+    assert res["timestep_rule"]["summary"] in md
+    assert (out / "stability.png").read_bytes()[:4] == b"\x89PNG"

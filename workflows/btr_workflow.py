@@ -1,0 +1,159 @@
+#!/usr/bin/python3
+"""btr-dem workflows (run with Debian's /usr/bin/python3).
+
+  compare PRE.csv POST.csv -o OUTDIR      structure before/after, displacements, nonphysical BTR configurations
+  pour PACKING.csv -o OUTDIR [--seed N]   reference LIGGGHTS pour of a BTR packing's grains
+  pipeline [SCENE] [-o OUTDIR]            BTR -> DEM relaxation -> comparison -> report (default inputs/bed3d.toml)
+  error-vs-runtime SCENE [-o OUTDIR]      error of BTR, BTR + relaxation and DEM pours against a pour reference
+  stability [-o OUTDIR] [--tiny]          relaxation stability sweep in each engine
+
+The `btr` program is $BTR_BINARY, else build/app/btr. Exit status: 0 done, 2 bad input, 3 a step failed
+(its error is printed and recorded in OUTDIR/run.json; what earlier steps wrote is kept)."""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from btrdem import metrics  # noqa: E402
+from btrdem.io import InputError  # noqa: E402
+from btrdem.runner import REPO, StepFailed  # noqa: E402
+
+DEFAULT_SCENE = REPO / "inputs" / "bed3d.toml"
+
+
+def progress(msg: str):
+    print(msg, flush=True)
+
+
+def window_arg(text: str) -> metrics.Window:
+    try:
+        parts = [float(x) for x in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected FLOOR,WALL,SURFACE in mean diameters, got {text!r}") from None
+    if len(parts) != 3 or min(parts) < 0:
+        raise argparse.ArgumentTypeError(f"expected three non-negative numbers FLOOR,WALL,SURFACE, got {text!r}")
+    return metrics.Window(*parts)
+
+
+def floats(text: str) -> list:
+    try:
+        return [float(x) for x in text.split(",") if x]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
+
+
+def pour_variants(text: str) -> list:
+    out = []
+    for item in text.split(","):
+        try:
+            pace, stop = item.split(":")
+            out.append((float(pace), float(stop)))
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected PACE:STOP_RATIO[,PACE:STOP_RATIO...], got {text!r}") from None
+    return out
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="btr_workflow.py", description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = ap.add_subparsers(dest="command", required=True)
+    win_help = "bulk window margins in mean diameters FLOOR,WALL,SURFACE (default 2,2,2)"
+
+    c = sub.add_parser("compare", help="compare two packings of the same grains")
+    c.add_argument("pre")
+    c.add_argument("post")
+    c.add_argument("-o", "--out", required=True)
+    c.add_argument("--scene", help="scene TOML (default: the scene in PRE's JSON)")
+    c.add_argument("--window", type=window_arg, default=metrics.Window(), help=win_help)
+    c.add_argument("--contact-tolerance", type=float, default=metrics.CONTACT_TOLERANCE)
+
+    p = sub.add_parser("pour", help="reference LIGGGHTS pour of a BTR packing's grains")
+    p.add_argument("packing")
+    p.add_argument("-o", "--out", required=True)
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--np", type=int, default=1)
+    p.add_argument("--pace", type=float, default=1.0, help="batch interval / batch fall time (default 1)")
+    p.add_argument("--stop-ratio", type=float, help="kinetic stop ratio (default: the scene's)")
+
+    pl = sub.add_parser("pipeline", help="BTR -> DEM relaxation -> comparison -> report")
+    pl.add_argument("scene", nargs="?", default=str(DEFAULT_SCENE))
+    pl.add_argument("-o", "--out", help="output folder (default out/<scene name>)")
+    pl.add_argument("--engine", choices=["liggghts", "yade"], default="liggghts")
+    pl.add_argument("--np", type=int, default=1)
+    pl.add_argument("--seed", type=int)
+    pl.add_argument("--count", type=int)
+
+    e = sub.add_parser("error-vs-runtime", help="error against run time of BTR, BTR + relaxation and DEM pours")
+    e.add_argument("scene")
+    e.add_argument("-o", "--out", help="output folder (default out/<scene name>/error_vs_runtime)")
+    e.add_argument("--engine", choices=["liggghts", "yade"], default="liggghts")
+    e.add_argument("--ref-seeds", type=int, default=3)
+    e.add_argument("--count", type=int, help="grains (default: the scene's)")
+    e.add_argument("--relax-times", type=floats, help="relaxation caps [s], e.g. 0.01,0.05,0.2")
+    e.add_argument("--pours", type=pour_variants, help="shorter pours PACE:STOP,... e.g. 0.25:1e-3,0.5:1e-4,1:1e-6")
+    e.add_argument("--np", type=int, default=1)
+    e.add_argument("--window", type=window_arg, default=metrics.Window(), help=win_help)
+
+    s = sub.add_parser("stability", help="relaxation stability sweep")
+    s.add_argument("-o", "--out", help="output folder (default out/stability)")
+    s.add_argument("--engines", default="liggghts,yade")
+    s.add_argument("--scene", help="base scene TOML (default: a small periodic bed)")
+    s.add_argument("--tiny", action="store_true", help="two values per parameter, 60 grains, 3000 steps")
+    s.add_argument("--max-steps", type=int)
+    s.add_argument("--np", type=int, default=1)
+
+    args = ap.parse_args(argv)
+    try:
+        if args.command == "compare":
+            from btrdem.compare import compare
+            from btrdem.runner import RunRecord
+            rec = RunRecord(args.out, "compare", inputs=[args.scene] if args.scene else [], progress=progress,
+                            settings={"pre": str(Path(args.pre).resolve()), "post": str(Path(args.post).resolve()),
+                                      "window": args.window.as_dict(), "contact_tolerance": args.contact_tolerance})
+            with rec.step("compare"):
+                res = compare(args.pre, args.post, args.out, args.scene, args.window, args.contact_tolerance,
+                              progress)
+            rec.finish()
+            st = res["displacement_d"]
+            progress(f"moved > 0.1 d: {100 * st['fraction_above_0.1']:.3g} %, > 0.5 d: "
+                     f"{100 * st['fraction_above_0.5']:.3g} %; change in packing fraction "
+                     f"{res['changes']['packing_fraction']}, coordination {res['changes']['coordination_mean']}")
+        elif args.command == "pour":
+            from btrdem.io import read_packing
+            from btrdem.pour import PourSettings, pour
+            from btrdem.runner import RunRecord
+            settings = PourSettings(seed=args.seed, np=args.np, pace=args.pace, stop_ratio=args.stop_ratio)
+            rec = RunRecord(args.out, "pour", inputs=[args.packing, str(Path(args.packing).with_suffix(".json"))],
+                            progress=progress, settings=settings.__dict__)
+            with rec.step("liggghts pour") as st:
+                summary = pour(read_packing(args.packing), args.out, settings, progress)
+                st.update(outputs=[summary["packing"]])
+            rec.finish(summary)
+        elif args.command == "pipeline":
+            from btrdem.pipeline import run_pipeline
+            run_pipeline(args.scene, args.out, args.engine, args.np, args.seed, args.count, progress)
+        elif args.command == "error-vs-runtime":
+            from btrdem.error_runtime import run_error_vs_runtime
+            run_error_vs_runtime(args.scene, args.out, args.engine, args.ref_seeds, args.count, args.relax_times,
+                                 args.pours, args.np, args.window, progress)
+        elif args.command == "stability":
+            from btrdem.stability import run_stability
+            engines = [x for x in args.engines.split(",") if x]
+            bad = [x for x in engines if x not in ("liggghts", "yade")]
+            if bad:
+                raise InputError(f"--engines: expected liggghts and/or yade, got {', '.join(bad)}")
+            run_stability(args.out, engines, args.scene, args.tiny, args.max_steps, args.np, progress)
+    except InputError as e:
+        print(f"btr_workflow.py {args.command}: {e}", file=sys.stderr)
+        return 2
+    except StepFailed as e:
+        print(f"btr_workflow.py {args.command}: FAILED: {e}", file=sys.stderr)
+        return 3
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

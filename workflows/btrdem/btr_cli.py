@@ -1,0 +1,107 @@
+"""The `btr` program's deposit and relax subcommands, run as subprocesses with progress lines."""
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+
+from .io import read_json, read_packing, write_json
+from .runner import StepFailed, run_command
+
+ENGINES = ("liggghts", "yade")
+
+
+def deposit(btr: str, scene_path: str, outdir, name: str = "btr", seed: int | None = None, count: int | None = None,
+            progress=print, label: str = "deposit") -> dict:
+    """btr deposit SCENE -o OUTDIR --name NAME [--seed] [--count]; returns {csv, wall_seconds, ...}."""
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    argv = [btr, "deposit", os.path.abspath(scene_path), "-o", str(outdir), "--name", name, "--quiet"]
+    if seed is not None:
+        argv += ["--seed", str(seed)]
+    if count is not None:
+        argv += ["--count", str(count)]
+    res = run_command(argv, outdir, label, progress=progress)
+    csv = outdir / f"{name}.csv"
+    if res["returncode"] != 0:
+        raise StepFailed(f"{label}: btr deposit exited with status {res['returncode']}:\n"
+                         f"{Path(res['stderr']).read_text(errors='replace').strip()[-2000:]}")
+    if not csv.exists():
+        raise StepFailed(f"{label}: btr deposit succeeded but wrote no {csv}")
+    return {"csv": str(csv), "wall_seconds": res["wall_seconds"], "argv": [str(a) for a in argv],
+            "stdout": res["stdout"], "stderr": res["stderr"]}
+
+
+def relax(btr: str, packing_csv: str, engine: str, outdir, np: int = 1, timestep: float | None = None,
+          time_limit: float | None = None, progress=print, label: str | None = None, check: bool = True) -> dict:
+    """btr relax PACKING --engine E -o OUTDIR; returns {returncode, wall_seconds, csv, error, ...}.
+    With check=True a failed run raises StepFailed with the program's message."""
+    if engine not in ENGINES:
+        raise StepFailed(f"relax: engine: expected one of {', '.join(ENGINES)}, got {engine!r}")
+    label = label or f"relax-{engine}"
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    argv = [btr, "relax", os.path.abspath(packing_csv), "--engine", engine, "-o", str(outdir), "--np", str(np)]
+    if timestep is not None:
+        argv += ["--timestep", repr(float(timestep))]
+    if time_limit is not None:
+        argv += ["--time-limit", repr(float(time_limit))]
+    log = _engine_log(outdir, engine)
+    res = run_command(argv, outdir, label, progress=progress, watch=log, stdout_name=f"{label}.stdout")
+    err = Path(res["stderr"]).read_text(errors="replace").strip()
+    out = {"returncode": res["returncode"], "wall_seconds": res["wall_seconds"], "argv": [str(a) for a in argv],
+           "csv": str(outdir / "relaxed.csv"), "error": err if res["returncode"] != 0 else None,
+           "stdout": Path(res["stdout"]).read_text(errors="replace").strip()}
+    if res["returncode"] == 0 and not (outdir / "relaxed.csv").exists():
+        out["returncode"] = -1
+        out["error"] = f"btr relax succeeded but wrote no {outdir / 'relaxed.csv'}"
+    if check and out["returncode"] != 0:
+        raise StepFailed(f"{label}: btr relax exited with status {res['returncode']}:\n{out['error'][-3000:]}")
+    return out
+
+
+def _engine_log(outdir: Path, engine: str) -> str:
+    return str(outdir / ("log.liggghts" if engine == "liggghts" else "yade.log"))
+
+
+def variant(packing_csv: str, outdir, name: str, scene_edit) -> str:
+    """A copy of PACKING.csv/.json into outdir/NAME.csv whose JSON scene was changed by
+    scene_edit(scene) (in place). Returns the new CSV path. `btr relax` reads its settings from it."""
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    src_json = Path(packing_csv).with_suffix(".json")
+    meta = read_json(src_json)
+    if "scene" not in meta:
+        raise StepFailed(f"{src_json}: no 'scene' to edit")
+    scene_edit(meta["scene"])
+    dst = outdir / f"{name}.csv"
+    shutil.copyfile(packing_csv, dst)
+    write_json(outdir / f"{name}.json", meta)
+    return str(dst)
+
+
+def scaled_variant(packing_csv: str, outdir, name: str, factor: float, scene_edit=None) -> str:
+    """A copy scaled by `factor` (positions, radii and the scene's lengths), for grain-size sweeps."""
+    p = read_packing(packing_csv)
+    meta = p.meta
+    sc = meta["scene"]
+    c = sc["container"]
+    for k in ("size_x", "size_y", "gap", "radius", "height"):
+        c[k] = c.get(k, 0.0) * factor
+    meta["container"] = c
+    for comp in sc["grains"]["components"]:
+        rs = comp["radius"]
+        for k in ("value", "min", "max"):
+            rs[k] = rs.get(k, 0.0) * factor
+        rs["list"] = [v * factor for v in rs.get("list", [])]
+    src = sc["source"]
+    for k in ("x", "y", "scatter", "x_min", "x_max", "y_min", "y_max"):
+        src[k] = src.get(k, 0.0) * factor
+    if scene_edit:
+        scene_edit(sc)
+    p.pos = p.pos * factor
+    p.radius = p.radius * factor
+    from .io import write_packing
+
+    write_packing(outdir, name, p, vtp=False)
+    return str(Path(outdir) / f"{name}.csv")
