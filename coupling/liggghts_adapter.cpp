@@ -6,6 +6,7 @@
 #include "coupling/engine_adapter.h"
 #include "coupling/liggghts_readback.h"
 #include "coupling/liggghts_script.h"
+#include "coupling/relax_plan.h"
 
 namespace btr {
 
@@ -15,6 +16,12 @@ class LiggghtsAdapter : public EngineAdapter {
  public:
   std::vector<std::string> write_inputs(const Packing& packing, const Scene& scene, const RelaxSettings&,
                                         const RelaxPlan& plan, const std::string& dir) const override {
+    // LIGGGHTS 3.8 aborts at run time on "0.05 < coefficientRestitution <= 1 required": refuse now.
+    for (const Component& c : scene.grains.components)
+      if (!(c.material.restitution > 0.05))
+        throw RelaxRefused("species " + std::to_string(c.species) + ": restitution " +
+                           std::to_string(c.material.restitution) +
+                           " is outside LIGGGHTS' accepted range (0.05, 1]; use YADE or a larger restitution");
     return write_liggghts_inputs(packing, scene, plan, dir);
   }
 

@@ -32,7 +32,20 @@ std::map<int, RadiusRange> radius_ranges(const Grains& grains, const Scene& scen
   return ranges;
 }
 
+// The lowest restitution of any contact the scene can make (grain pairs take the mean, walls the grain's).
+double lowest_restitution(const Scene& scene) {
+  double e = 1.0;
+  for (const Component& c : scene.grains.components) e = std::min(e, c.material.restitution);
+  return e;
+}
+
 }  // namespace
+
+double damping_ratio(double restitution) {
+  if (restitution >= 1.0) return 0.0;
+  const double l = std::log(restitution);
+  return -l / std::sqrt(M_PI * M_PI + l * l);
+}
 
 double rayleigh_time(double radius, double density, double young, double poisson) {
   const double shear = young / (2.0 * (1.0 + poisson));
@@ -67,6 +80,13 @@ StableStep stable_timestep(const Grains& grains, const Scene& scene) {
   const auto ranges = radius_ranges(grains, scene);
   StableStep s;
   s.fraction = scene.relax.timestep_fraction;
+  const double e_low = lowest_restitution(scene);
+  const double zeta = damping_ratio(e_low);
+  const double verlet = std::sqrt(1.0 + zeta * zeta) - zeta;
+  auto damping_note = [&]() {
+    return " x damping factor " + fmt(s.damping_factor) + " (lowest restitution " + fmt(e_low) + ", zeta = " + fmt(zeta) +
+           ")";
+  };
 
   if (scene.relax.model == "hertz") {
     double best = std::numeric_limits<double>::infinity();
@@ -78,11 +98,12 @@ StableStep stable_timestep(const Grains& grains, const Scene& scene) {
     }
     const Component& c = comps[best_c];
     s.characteristic_time = best;
-    s.step = s.fraction * best;
+    s.damping_factor = verlet;
+    s.step = s.fraction * s.damping_factor * best;
     s.rule = "Rayleigh time pi R sqrt(rho/G)/(0.1631 nu + 0.8766) = " + fmt(best) + " s (Hertz; smallest grain R = " +
              fmt(ranges.at(best_c).min) + " m of species " + std::to_string(c.species) + ", rho = " + fmt(c.density) +
              " kg/m^3, E = " + fmt(c.material.young) + " Pa, nu = " + fmt(c.material.poisson) + ") x " +
-             fmt(s.fraction) + " = " + fmt(s.step) + " s";
+             fmt(s.fraction) + damping_note() + " = " + fmt(s.step) + " s";
     return s;
   }
   if (scene.relax.model != "hooke")
@@ -132,9 +153,10 @@ StableStep stable_timestep(const Grains& grains, const Scene& scene) {
     }
   }
   s.characteristic_time = best;
-  s.step = s.fraction * best;
+  s.damping_factor = std::sqrt(1.0 - zeta * zeta) * verlet;
+  s.step = s.fraction * s.damping_factor * best;
   s.rule = "contact time pi/sqrt(k/m_eff - (gamma/2)^2) = " + fmt(best) + " s (Hooke, V = " + fmt(v) + " m/s; " +
-           what + ") x " + fmt(s.fraction) + " = " + fmt(s.step) + " s";
+           what + ") x " + fmt(s.fraction) + damping_note() + " = " + fmt(s.step) + " s";
   return s;
 }
 

@@ -5,7 +5,11 @@
 //  Hooke: contact time   t_c = pi / sqrt(k / m_eff - (gamma / 2)^2), gamma = gamma_n / m_eff, with
 //         k and gamma_n as LIGGGHTS "model hooke" computes them from the materials and the
 //         characteristic impact velocity V, for the stiffest contact the packing can make.
-// The stable step is timestep_fraction times that time.
+// The stable step is timestep_fraction times that time, times a damping factor: velocity Verlet on a
+// damped oscillator is stable only for dt < (2/omega_0)(sqrt(1 + zeta^2) - zeta), so strong damping
+// (low restitution) shortens the step. zeta is the damping ratio of the lowest restitution in the
+// scene, zeta = -ln e / sqrt(pi^2 + ln^2 e). Hertz: factor sqrt(1 + zeta^2) - zeta; Hooke, whose
+// contact time already grows by 1 / sqrt(1 - zeta^2) with damping: sqrt(1 - zeta^2)(sqrt(1 + zeta^2) - zeta).
 #include <string>
 
 #include "btr/grain.h"
@@ -25,10 +29,14 @@ double hooke_contact_time(double stiffness, double m_eff, double damping);
 // through the largest diameter of the packing, sqrt(2 g d_max) (the scale of BTR's rearrangements).
 double hooke_characteristic_velocity(const Grains& grains);
 
+// Damping ratio of a contact of restitution e (0 for e = 1).
+double damping_ratio(double restitution);
+
 struct StableStep {
   double characteristic_time = 0.0;  // T_R or t_c [s]
   double fraction = 0.0;             // scene relax.timestep_fraction
-  double step = 0.0;                 // fraction * characteristic_time [s]
+  double damping_factor = 1.0;       // see above
+  double step = 0.0;                 // fraction * damping_factor * characteristic_time [s]
   std::string rule;                  // one line naming the rule, the grain(s) and the numbers
 };
 

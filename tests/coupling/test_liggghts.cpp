@@ -298,6 +298,21 @@ TEST(Liggghts, LargeOverlapRefusedBeforeTheEngine) {
   EXPECT_TRUE(fs::is_empty(dir)) << "nothing written, no engine started";
 }
 
+// LIGGGHTS aborts on restitution <= 0.05 at run time; the coupling refuses it before writing.
+TEST(Liggghts, RestitutionOutsideLiggghtsRangeRefused) {
+  btr::Scene scene = btr_test::make_scene("lowe", 3, container(ContainerKind::Periodic));
+  scene.grains.components[0].material.restitution = 0.05;
+  const btr::Packing p = btr_test::layered_packing(scene, 20, 3);
+  const std::string dir = btr_test::fresh_dir("lowe");
+  try {
+    btr::export_inputs(p, scene, "liggghts", {}, dir);
+    FAIL() << "expected a refusal";
+  } catch (const btr::RelaxRefused& e) {
+    EXPECT_NE(std::string(e.what()).find("restitution"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(fs::path(dir) / "in.btr"));
+}
+
 namespace {
 
 // Writes the inputs for a small packing, lets `edit` break the script, runs them.

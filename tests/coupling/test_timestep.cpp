@@ -47,9 +47,11 @@ TEST(Timestep, RayleighSoft) {
 TEST(Timestep, HertzStableStepUsesSmallestGrain) {
   const btr::Scene s = one_species(2500, 63e9, 0.2, 0.9, "hertz");
   const btr::StableStep st = btr::stable_timestep(two_grains(1e-3, 0.5e-3), s);
-  // T_R scales with R: 0.5 mm gives 5.331584e-7 s; x 0.2 = 1.066317e-7 s.
+  // T_R scales with R: 0.5 mm gives 5.331584e-7 s; x 0.2 = 1.066317e-7 s; e = 0.9:
+  // zeta = 0.1053605 / sqrt(pi^2 + 0.0111008) = 0.0335185, factor sqrt(1 + zeta^2) - zeta = 0.9670432.
   EXPECT_NEAR(st.characteristic_time, 5.331584e-7, 1e-12);
-  EXPECT_NEAR(st.step, 1.066317e-7, 1e-12);
+  EXPECT_NEAR(st.damping_factor, 0.9670432, 1e-7);
+  EXPECT_NEAR(st.step, 1.066317e-7 * 0.9670432, 1e-12);
   EXPECT_NE(st.rule.find("Rayleigh"), std::string::npos) << st.rule;
   EXPECT_NE(st.rule.find("0.0005"), std::string::npos) << st.rule;  // the radius it used
 }
@@ -72,7 +74,8 @@ TEST(Timestep, HookeGlassPair) {
   const btr::Scene s = one_species(2500, 63e9, 0.2, 0.9, "hooke");
   const btr::StableStep st = btr::stable_timestep(two_grains(1e-3, 1e-3), s);
   EXPECT_NEAR(st.characteristic_time, 9.293928e-6, 1e-11);  // the pair is stiffer than a grain on a wall
-  EXPECT_NEAR(st.step, 0.2 * 9.293928e-6, 1e-11);
+  // damping: sqrt(1 - zeta^2) (sqrt(1 + zeta^2) - zeta) = 0.9994382 * 0.9670432 = 0.9664999
+  EXPECT_NEAR(st.step, 0.2 * 9.293928e-6 * 0.9664999, 1e-11);
   EXPECT_NE(st.rule.find("contact time"), std::string::npos) << st.rule;
 }
 
@@ -96,4 +99,16 @@ TEST(Timestep, StiffestSpeciesWins) {
   g[1].species = 2;
   const btr::StableStep st = btr::stable_timestep(g, s);
   EXPECT_NEAR(st.characteristic_time, 1.066317e-6, 1e-12);
+}
+
+// Strong damping shortens the stable step: e = 0.05 gives zeta = 2.995732 / sqrt(pi^2 + 8.974412)
+// = 0.6901067 and a Verlet factor sqrt(1 + zeta^2) - zeta = 0.5249024.
+TEST(Timestep, LowRestitutionShortensTheStep) {
+  EXPECT_NEAR(btr::damping_ratio(0.05), 0.6901067, 1e-6);
+  EXPECT_EQ(btr::damping_ratio(1.0), 0.0);
+  const btr::Scene s = one_species(2500, 63e9, 0.2, 0.05, "hertz");
+  const btr::StableStep st = btr::stable_timestep(two_grains(1e-3, 1e-3), s);
+  EXPECT_NEAR(st.damping_factor, 0.5249024, 1e-6);
+  EXPECT_NEAR(st.step, 0.2 * 0.5249024 * 1.066317e-6, 1e-12);
+  EXPECT_NE(st.rule.find("damping factor"), std::string::npos) << st.rule;
 }
