@@ -79,12 +79,12 @@ struct Deposition::Impl {
   Impl(int dim, const Container& c, double rmax, int events)
       : dimension(dim), container(c), r_max(rmax), max_events(events), grid(dim, c, rmax) {}
 
-  Obstacle sphere(std::int32_t i, const Vec3& shift, int image, double r) const {
+  static Obstacle sphere(std::int32_t i, const Vec3& centre, double radius, int image, double r) {
     Obstacle o;
     o.kind = Obstacle::Kind::Sphere;
     o.key = static_cast<std::int64_t>(i) * 81 + image;
-    o.c = grains[i].x + shift;
-    o.R = r + grains[i].r;
+    o.c = centre;
+    o.R = r + radius;
     return o;
   }
 
@@ -107,8 +107,8 @@ void Deposition::Impl::fall(Vec3& x, double r, Contacts& active, const std::vect
   grid.visit_column_down(
       x.x(), x.y(), reach, x.z() + reach,
       [&](double layer_top) { return layer_top + reach > x.z() - ev.t; },
-      [&](std::int32_t i, const Vec3& shift, int image) {
-        Obstacle o = sphere(i, shift, image, r);
+      [&](std::int32_t i, const Vec3& centre, double radius, int image) {
+        Obstacle o = sphere(i, centre, radius, image, r);
         const double dx = x.x() - o.c.x(), dy = x.y() - o.c.y();
         const double s = o.R * o.R - dx * dx - dy * dy;
         if (s <= 1e-12 * o.R * o.R) return;  // passes beside it (or grazes its equator)
@@ -177,11 +177,10 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
   Vec3 lo, hi;
   arc.bounds(lo, hi);
   const Vec3 reach = Vec3::Constant(r + r_max);
-  grid.visit_box(lo - reach, hi + reach, [&](std::int32_t i, const Vec3& shift, int image) {
-    const Vec3 c = grains[i].x + shift;
-    const double R = r + grains[i].r;
+  grid.visit_box(lo - reach, hi + reach, [&](std::int32_t i, const Vec3& c, double radius, int image) {
+    const double R = r + radius;
     if ((c - c.cwiseMax(lo).cwiseMin(hi)).squaredNorm() > R * R) return;  // too far from the arc's box
-    offer_sphere(sphere(i, shift, image, r));
+    offer_sphere(sphere(i, c, radius, image, r));
   });
 
   // A support lifts off where its load changes sign: gravity's part normal to the path is then
@@ -281,7 +280,9 @@ bool Deposition::Impl::roll_along_cylinder(Vec3& x, double r, Contacts& active, 
     const Vec3 here = at(phi).first;
     grid.visit_box(here - Vec3::Constant(reach + 20 * std::abs(step) * Rc),
                    here + Vec3::Constant(reach + 20 * std::abs(step) * Rc),
-                   [&](std::int32_t i, const Vec3& shift, int image) { candidates.push_back(sphere(i, shift, image, r)); });
+                   [&](std::int32_t i, const Vec3& c, double radius, int image) {
+                     candidates.push_back(sphere(i, c, radius, image, r));
+                   });
     for (int k = 0; k < 20; ++k) {
       if (condition(phi + step) == 0) {
         phi += step;
@@ -473,7 +474,7 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
     if (dimension == 3) x.y() -= container.size_y * std::floor(x.y() / container.size_y + 0.5);
   }
   grains.push_back(Grain{x, r, drop.species});
-  grid.insert(static_cast<std::int32_t>(grains.size() - 1), x);
+  grid.insert(static_cast<std::int32_t>(grains.size() - 1), x, r);
   top = std::max(top, x.z() + r);
   return grains.back();
 }

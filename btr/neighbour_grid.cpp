@@ -42,7 +42,7 @@ NeighbourGrid::NeighbourGrid(int dimension, const Container& c, double r_max)
       break;
   }
   if (dimension == 2) { y0_ = -0.5 * h_; iy0_ = 0; ny_ = 1; hy_ = h_; }
-  heads_.resize(static_cast<std::size_t>(nx_ * ny_));
+  columns_.resize(static_cast<std::size_t>(nx_ * ny_));
 }
 
 NeighbourGrid::Range NeighbourGrid::x_range(double lo, double hi) const {
@@ -59,15 +59,15 @@ void NeighbourGrid::grow_to(long ix, long iy) {
   while (ix < new_ix0 || ix >= new_ix0 + new_nx) { new_ix0 -= new_nx / 2; new_nx *= 2; }
   if (dimension_ == 3)
     while (iy < new_iy0 || iy >= new_iy0 + new_ny) { new_iy0 -= new_ny / 2; new_ny *= 2; }
-  std::vector<std::vector<std::int32_t>> grown(static_cast<std::size_t>(new_nx * new_ny));
+  std::vector<std::vector<Cell>> grown(static_cast<std::size_t>(new_nx * new_ny));
   for (long y = iy0_; y < iy0_ + ny_; ++y)
     for (long x = ix0_; x < ix0_ + nx_; ++x)
-      grown[(x - new_ix0) + new_nx * (y - new_iy0)] = std::move(heads_[column_of(x, y)]);
-  heads_ = std::move(grown);
+      grown[(x - new_ix0) + new_nx * (y - new_iy0)] = std::move(columns_[column_of(x, y)]);
+  columns_ = std::move(grown);
   ix0_ = new_ix0; nx_ = new_nx; iy0_ = new_iy0; ny_ = new_ny;
 }
 
-void NeighbourGrid::insert(std::int32_t index, const Vec3& x) {
+void NeighbourGrid::insert(std::int32_t index, const Vec3& x, double r) {
   long ix = static_cast<long>(std::floor((x.x() - x0_) / hx_));
   long iy = dimension_ == 3 ? static_cast<long>(std::floor((x.y() - y0_) / hy_)) : 0;
   if (periodic_) {
@@ -80,11 +80,9 @@ void NeighbourGrid::insert(std::int32_t index, const Vec3& x) {
     iy = std::clamp(iy, iy0_, iy0_ + ny_ - 1);
   }
   const long iz = std::max(0L, static_cast<long>(std::floor(x.z() / h_)));
-  auto& column = heads_[column_of(ix, iy)];
-  if (static_cast<long>(column.size()) <= iz) column.resize(iz + 1, -1);
-  if (static_cast<std::size_t>(index) >= next_.size()) next_.resize(std::max<std::size_t>(index + 1, 2 * next_.size()), -1);
-  next_[index] = column[iz];
-  column[iz] = index;
+  auto& column = columns_[column_of(ix, iy)];
+  if (static_cast<long>(column.size()) <= iz) column.resize(iz + 1);
+  column[iz].push_back(Entry{x.x(), x.y(), x.z(), r, index});
 }
 
 }  // namespace btr

@@ -16,12 +16,12 @@ class NeighbourGrid {
  public:
   NeighbourGrid(int dimension, const Container& container, double r_max);
 
-  void insert(std::int32_t index, const Vec3& x);
+  void insert(std::int32_t index, const Vec3& x, double r);
 
   double cell() const { return h_; }
 
-  // f(index, shift, image) for every grain in the cells meeting [lo, hi]; shift is the periodic
-  // offset to add to the stored centre, image a small code telling images of one grain apart.
+  // f(index, centre, radius, image) for every grain in the cells meeting [lo, hi]; the centre is
+  // that of the periodic image found, and image a small code telling images of one grain apart.
   template <class F>
   void visit_box(const Vec3& lo, const Vec3& hi, F&& f) const;
 
@@ -50,8 +50,13 @@ class NeighbourGrid {
   double period_x_ = 0.0, period_y_ = 0.0;
   long ix0_ = 0, iy0_ = 0;  // index range held: [ix0, ix0 + nx)
   long nx_ = 1, ny_ = 1;
-  std::vector<std::vector<std::int32_t>> heads_;  // per column, per layer: last grain inserted or -1
-  std::vector<std::int32_t> next_;                // per grain: the grain inserted before it in its cell
+  // A cell keeps copies of its grains' centres and radii, so a query reads memory in order.
+  struct Entry {
+    double x, y, z, r;
+    std::int32_t index;
+  };
+  using Cell = std::vector<Entry>;
+  std::vector<std::vector<Cell>> columns_;  // per column, per layer
 };
 
 template <class F>
@@ -64,13 +69,13 @@ void NeighbourGrid::visit_cell_range(Range rx, Range ry, long iz_lo, long iz_hi,
       long wx = ix, kx = 0;
       if (periodic_) { kx = floor_div(ix, nx_); wx = ix - kx * nx_; }
       else if (ix < ix0_ || ix >= ix0_ + nx_) continue;
-      const auto& column = heads_[column_of(wx, wy)];
+      const auto& column = columns_[column_of(wx, wy)];
       const long top = std::min<long>(iz_hi, static_cast<long>(column.size()) - 1);
       if (top < iz_lo) continue;
-      const Vec3 shift(kx * period_x_, ky * period_y_, 0.0);
+      const double sx = kx * period_x_, sy = ky * period_y_;
       const int image = static_cast<int>((kx + 4) * 9 + (ky + 4));
       for (long iz = std::max(0L, iz_lo); iz <= top; ++iz)
-        for (std::int32_t i = column[iz]; i >= 0; i = next_[i]) f(i, shift, image);
+        for (const Entry& e : column[iz]) f(e.index, Vec3(e.x + sx, e.y + sy, e.z), e.r, image);
     }
   }
 }
@@ -94,7 +99,7 @@ void NeighbourGrid::visit_column_down(double x, double y, double reach, double z
       long wx = ix;
       if (periodic_) wx = ix - floor_div(ix, nx_) * nx_;
       else if (ix < ix0_ || ix >= ix0_ + nx_) continue;
-      top = std::max<long>(top, static_cast<long>(heads_[column_of(wx, wy)].size()) - 1);
+      top = std::max<long>(top, static_cast<long>(columns_[column_of(wx, wy)].size()) - 1);
     }
   }
   top = std::min<long>(top, static_cast<long>(std::floor(z_start / h_)));
