@@ -7,27 +7,15 @@
 // unchanged with `yade -n -x relax_yade.py` for users who prefer the launcher (e.g. on a cluster).
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <stdexcept>
 
+#include "coupling/text_file.h"
 #include "coupling/yade_script.h"
 
 namespace btr {
 namespace {
 
 namespace fs = std::filesystem;
-
-void write_text_atomically(const fs::path& target, const std::string& text) {
-  const fs::path tmp = target.string() + ".tmp";
-  {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f) throw std::runtime_error("cannot write " + tmp.string());
-    f << text;
-    f.close();
-    if (!f) throw std::runtime_error("error while writing " + tmp.string());
-  }
-  fs::rename(tmp, target);
-}
 
 std::string packing_csv(const Packing& packing) {
   std::string out = "id,x,y,z,radius,species\n";
@@ -51,8 +39,8 @@ class YadeAdapter : public EngineAdapter {
     // Outputs of an earlier run in the same folder must not be read as this run's.
     for (const char* name : {yade_files::kStatus, yade_files::kFinal, yade_files::kKinetic, yade_files::kContacts})
       fs::remove(d / name);
-    write_text_atomically(d / yade_files::kPacking, packing_csv(packing));
-    write_text_atomically(d / yade_files::kScript, script);
+    write_text_file((d / yade_files::kPacking).string(), packing_csv(packing));
+    write_text_file((d / yade_files::kScript).string(), script);
     fs::permissions(d / yade_files::kScript, fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec,
                     fs::perm_options::add);
     return {(d / yade_files::kScript).string(), (d / yade_files::kPacking).string()};

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -17,28 +16,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string log_tail(const fs::path& log, std::size_t count = 20) {
-  std::ifstream f(log);
-  if (!f) return "(no log file " + log.string() + ")";
-  std::deque<std::string> last;
-  std::string line;
-  while (std::getline(f, line)) {
-    last.push_back(line);
-    if (last.size() > count) last.pop_front();
-  }
-  std::string out;
-  for (const auto& l : last) out += l + "\n";
-  return out;
-}
-
 class Reader {
  public:
   explicit Reader(std::string dir) : dir_(std::move(dir)) {}
 
-  [[noreturn]] void fail(const std::string& what) const {
-    throw EngineFailure("YADE run in " + dir_ + " failed: " + what + "\n--- last lines of " + yade_files::kLog +
-                        " ---\n" + log_tail(fs::path(dir_) / yade_files::kLog));
-  }
+  // relax.cpp adds the tail of the log to the message.
+  [[noreturn]] void fail(const std::string& what) const { throw EngineFailure("YADE run in " + dir_ + ": " + what); }
 
   // Rows of numbers of a CSV output with exactly this header.
   std::vector<std::vector<double>> csv(const char* name, const std::string& header) const {

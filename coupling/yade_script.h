@@ -20,9 +20,6 @@ constexpr const char* kLog = "yade.log";
 // Where Debian installs the `yade` Python module (package yade, double precision build).
 constexpr const char* kYadePythonPath = "/usr/lib/x86_64-linux-gnu/yade-double/py";
 
-// Gravitational acceleration [m/s^2] used by the script (along -z).
-constexpr double kYadeGravity = 9.81;
-
 // The Python functions every script shares (coupling/yade_script_library.cpp).
 const char* yade_script_library();
 

@@ -321,8 +321,8 @@ def main():
         return 0
     except Exception as exc:
         message = str(exc) if isinstance(exc, RunFailure) else "%s: %s" % (type(exc).__name__, exc)
-        log("FAILED: " + message)
         log(traceback.format_exc())
+        log("FAILED: " + message)  # last, so that the tail of the log names the failure
         if _history:
             write_history()
         write_status("failed", "", message, time.time() - t0)

@@ -135,7 +135,9 @@ double largest_wall_overlap(const btr::Grains& g, const btr::Container& c, int d
       dist.push_back(c.radius - std::hypot(q.x.x(), q.x.y()));
     } else if (c.kind == ContainerKind::Periodic) {
       EXPECT_TRUE(q.x.x() >= -c.size_x / 2 && q.x.x() < c.size_x / 2) << q.x.x();
-      if (dim == 3) EXPECT_TRUE(q.x.y() >= -c.size_y / 2 && q.x.y() < c.size_y / 2) << q.x.y();
+      if (dim == 3) {
+        EXPECT_TRUE(q.x.y() >= -c.size_y / 2 && q.x.y() < c.size_y / 2) << q.x.y();
+      }
     }
     for (double d : dist) worst = std::max(worst, (q.r - d) / q.r);
   }
@@ -168,7 +170,9 @@ void check_relaxation(const Case& c, const btr::Scene& scene, const btr::Packing
   for (std::size_t i = 0; i < in.grains.size(); ++i) {
     EXPECT_EQ(out.grains[i].r, in.grains[i].r);
     EXPECT_EQ(out.grains[i].species, in.grains[i].species);
-    if (c.dimension == 2) EXPECT_EQ(out.grains[i].x.y(), 0.0) << "2D grains stay in y = 0";
+    if (c.dimension == 2) {
+      EXPECT_EQ(out.grains[i].x.y(), 0.0) << "2D grains stay in y = 0";
+    }
     moved = std::max(moved, (out.grains[i].x - in.grains[i].x).norm());
     z_in += in.grains[i].x.z();
     z_out += out.grains[i].x.z();
