@@ -40,9 +40,9 @@ double slab_fraction(const btr::Grains& grains, const btr::Container& c, double 
 
 }  // namespace
 
-// Tolerance: 0.002 in packing fraction (measured here: 1e-4, BTR to relaxed moves it by 1e-3). Both engines use the same time step, contact law family
-// (Hertz with restitution-based viscous damping), materials and stop rule; what differs is their
-// tangential and damping details, which could move a settled bed by a few thousandths.
+// Tolerance: 0.002 in packing fraction (measured: 1e-4; relaxation itself moves it by about 1e-3).
+// Both engines use the same time step, contact law family (Hertz with restitution-based viscous
+// damping), materials and stop rule; their tangential and damping details differ.
 TEST(EnginesAgree, PackingFractionAfterRelaxation) {
   if (!on_path("liggghts")) GTEST_SKIP() << "liggghts not on PATH";
   btr::Scene scene = btr_test::make_scene("agree", 3, btr_test::container(btr::ContainerKind::Periodic, 0.012, 0.012));
