@@ -10,7 +10,8 @@ Each case starts from the base scene and changes one thing:
   timestep_x     an explicit --timestep of this multiple of the stable step (above 1: must be refused)
 Every relaxation is capped at `max_steps` time steps (max_time = min(scene max_time, max_steps dt)).
 Status: pass; fail with the reason (engine error, kinetic energy growth, overlap above bound, grains
-lost); refused (the coupling refused the time step, as its rule says it must above the stable step).
+lost); refused (the coupling refused the case before any engine ran: a time step above the stable one,
+as its rule says it must, or a value the engine cannot run, e.g. LIGGGHTS' restitution <= 0.05).
 The time-step rule is consistent when every case it allows passes."""
 from __future__ import annotations
 
@@ -177,8 +178,10 @@ def run_stability(outdir=None, engines=("liggghts", "yade"), base_scene: str | N
                 if r["returncode"] == 0:
                     status, reason, info = check_result(r["csv"], len(p), threshold)
                     row.update(info)
-                elif r["returncode"] == 2 and "time step" in (r["error"] or "") and "above the stable" in r["error"]:
-                    status, reason = "refused", r["error"].splitlines()[0].replace("btr relax: ", "")
+                elif r["returncode"] == 2:
+                    # refused by the coupling before any engine ran: a step above the stable one,
+                    # or a value the engine cannot run (LIGGGHTS: restitution <= 0.05)
+                    status, reason = "refused", (r["error"] or "refused").splitlines()[0].replace("btr relax: ", "")
                 else:
                     status, reason = "fail", classify_failure(r["error"] or "")
                     row["error"] = (r["error"] or "")[:2000]
@@ -260,7 +263,9 @@ def timestep_rule_verdict(results) -> dict:
                    "; ".join(f"{r['case']} / {r['engine']} ({r['reason']})" for r in failed))
     else:
         summary = f"Time-step rule: all {len(allowed)} allowed cases passed"
-    summary += f"; {len(refused)} refused as above the stable step."
+    above = sum(1 for r in refused if "above the stable" in r["reason"])
+    summary += (f"; {len(refused)} refused before any engine ran ({above} for a step above the stable one, "
+                f"{len(refused) - above} for values the engine cannot run)."
     if wrongly_allowed:
         summary += " Steps above the stable one were NOT refused: " + ", ".join(
             f"{r['case']} / {r['engine']}" for r in wrongly_allowed) + "."
