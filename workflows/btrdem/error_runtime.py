@@ -219,6 +219,7 @@ def plot(path, rows, floor, limit, names) -> str:
         ax.set_ylabel(f"error: {MEASURES[key]}")
         ax.legend(fontsize=7, loc="best")
     fig.suptitle("Error against the DEM pour reference vs wall time")
+    fig.tight_layout()
     return report.save_figure(fig, path)
 
 
