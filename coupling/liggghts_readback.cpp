@@ -152,7 +152,10 @@ RelaxResult read_liggghts_result(const std::string& dir, const Packing& original
     fail(final_path, "lost atoms: " + std::to_string(atoms.rows.size()) + " grains of " + std::to_string(n));
   const int c_id = atoms.column("id", final_path), c_x = atoms.column("x", final_path),
             c_y = atoms.column("y", final_path), c_z = atoms.column("z", final_path);
+  const int c_vx = atoms.column("vx", final_path), c_vy = atoms.column("vy", final_path),
+            c_vz = atoms.column("vz", final_path);
   res.relaxed.grains = original.grains;
+  res.velocities.assign(n, Vec3::Zero());
   res.relaxed.meta = original.meta;
   std::vector<char> seen(n, 0);
   const std::vector<DemWall> walls = dem_walls(scene.container, scene.dimension);
@@ -164,6 +167,7 @@ RelaxResult read_liggghts_result(const std::string& dir, const Packing& original
     seen[i] = 1;
     Grain& g = res.relaxed.grains[i];
     g.x = Vec3(row[c_x], row[c_y], row[c_z]);
+    res.velocities[i] = Vec3(row[c_vx], row[c_vy], row[c_vz]);
     for (const DemWall& w : walls) {
       const std::string f = "f_force_" + liggghts_wall_id(w.name);
       double fn;

@@ -19,8 +19,9 @@ struct LiggghtsLog {
 // Throws EngineFailure if the log cannot be read.
 LiggghtsLog parse_liggghts_log(const std::string& path);
 
-// Reads dir/log.liggghts, dir/btr_final.dump and dir/btr_contacts.dump; throws EngineFailure (with
-// what is wrong) for a failed run, a missing or incomplete dump, missing ids or non-finite values.
+// Reads dir/log.liggghts, dir/btr_final.dump (positions, velocities) and dir/btr_contacts.dump; throws
+// EngineFailure (with what is wrong) for a failed run, a missing or incomplete dump, missing ids or
+// non-finite values.
 RelaxResult read_liggghts_result(const std::string& dir, const Packing& original, const Scene& scene);
 
 }  // namespace btr

@@ -196,6 +196,13 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
         throw failure(who + " is outside the container: its centre is beyond the " + w.name + " wall by " +
                       g6(-w.distance(g.x)) + " m");
   }
+  if (!res.velocities.empty()) {
+    if (res.velocities.size() != in.size())
+      throw failure("velocities of " + std::to_string(res.velocities.size()) + " grains came back, expected " +
+                    std::to_string(in.size()));
+    for (std::size_t i = 0; i < res.velocities.size(); ++i)
+      if (!res.velocities[i].allFinite()) throw failure("grain " + std::to_string(i + 1) + " has a non-finite velocity");
+  }
   const double bound = kinetic_energy_bound(in, scene);
   for (const auto& [t, e] : res.kinetic_history)
     if (!std::isfinite(e) || e > bound)
@@ -260,6 +267,18 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
     con += row;
   }
   write_text_file((fs::path(dir) / "contacts.csv").string(), con);
+  const fs::path velocities = fs::path(dir) / "velocities.csv";
+  if (res.velocities.empty()) {
+    fs::remove(velocities, ec);  // an earlier run's file must not pass for this one's
+  } else {
+    std::string vel = "id,vx,vy,vz\n";
+    for (std::size_t i = 0; i < res.velocities.size(); ++i) {
+      const Vec3& v = res.velocities[i];
+      std::snprintf(row, sizeof row, "%zu,%.17g,%.17g,%.17g\n", i + 1, v.x(), v.y(), v.z());
+      vel += row;
+    }
+    write_text_file(velocities.string(), vel);
+  }
   return res;
 }
 

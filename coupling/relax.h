@@ -25,6 +25,7 @@ struct RelaxResult {
   double simulated_time = 0.0;      // s
   double wall_seconds = 0.0;
   std::vector<std::pair<double, double>> kinetic_history;  // (time, kinetic energy)
+  std::vector<Vec3> velocities;     // final translational velocity of each grain, same order as relaxed.grains
   struct Contact { std::int64_t i, j; double fn; };       // j == 0 for a wall
   std::vector<Contact> contacts;
 };

@@ -140,6 +140,26 @@ std::string rolling_call(const Scene& scene, const PackingStats& st, double mu_r
          num(mu_r) + ": krot = kt R*^2, cap mu_r R* Fn\n";
 }
 
+// How far YADE's collider extends each grain's bounding box (its verlet distance): YADE's default,
+// 0.5 r_min (the LIGGGHTS script's neighbour skin), unless a periodic cell needs less. YADE keeps one
+// interaction per pair, with one periodic image chosen by the collider, and for a box spanning more than
+// half the period along an axis (allowed here because of the floor box) it silently takes image 0 along
+// that axis: two grains touching across the boundary then never meet, and one falls through the other.
+// So each grain's box, 2 (r_max + d), must stay below half of every lateral period: d = 0.9 (L/4 - r_max)
+// when that is smaller; a period of 4 r_max or less, where a grain can touch two images of another at
+// once, is refused.
+double verlet_distance(const Scene& scene, const PackingStats& st, double period_x, double period_y) {
+  double d = 0.5 * st.r_min;
+  if (scene.container.kind != ContainerKind::Periodic) return d;
+  const double period = std::min(period_x, period_y);
+  const double room = 0.25 * period - st.r_max;
+  if (!(room > 0.0))
+    refuse(scene, "container.size",
+           "YADE needs a period above 4 largest radii (" + num(4.0 * st.r_max) + " m) to give each pair one periodic "
+           "image; got " + num(period) + " m");
+  return std::min(d, 0.9 * room);
+}
+
 const char* kHeader = R"(#
 # Run it in one of two ways (every file is read from and written to this script's folder):
 #   PYTHONPATH=/usr/lib/x86_64-linux-gnu/yade-double/py OMP_NUM_THREADS=1 /usr/bin/python3 relax_yade.py
@@ -163,7 +183,10 @@ const char* kHeader = R"(#
 # Stop rule (the LIGGGHTS script's): every STEPS_PER_CHECK steps the translational kinetic energy E and its
 # mean over the last STEPS_PER_CHECK steps are compared with KINETIC_THRESHOLD; the run stops when both are
 # below it, once armed (the mean was above it once, or t >= ARMING_TIME), else after MAX_CHECKS checks.
-# A run fails on NaN, E above KINETIC_BOUND, lost bodies, or a grain below the floor.
+# The rule runs inside YADE's loop (a PyRunner every AVERAGE_EVERY steps), which pauses YADE when it decides.
+# A run fails on NaN, E above KINETIC_BOUND (checked at every sample), lost bodies, or a grain below the floor.
+# Periodic cells: YADE gives a pair one periodic image, chosen by the collider, and only while each grain's
+# bounding box (diameter + 2 VERLET_DIST) is below half the period; VERLET_DIST is chosen for that.
 # 2D: disks in the x-z plane are YADE spheres (sphere masses) with blockedDOFs "yXZ": no motion along y,
 # rotation about y only.
 )";
@@ -201,6 +224,11 @@ std::string yade_script(const Packing& packing, const Scene& scene, const RelaxP
     refuse(scene, "container", e.what());
   }
   const PackingStats st = stats_of(packing);
+  const Container& box = scene.container;
+  // Periodic cell: 2D gets a y period wide enough that no disk meets its own image; z is far above the packing.
+  const double period_y = scene.dimension == 2 ? 8.0 * st.r_max : box.size_y;
+  const double period_z = std::max(2.0 * box.height, 4.0 * st.top);
+  const double verlet = verlet_distance(scene, st, box.size_x, period_y);
   const LiggghtsSchedule sched = liggghts_schedule(packing.grains, scene, plan);
   const double velocity = hooke ? hooke_characteristic_velocity(packing.grains) : 0.0;
 
@@ -220,7 +248,9 @@ std::string yade_script(const Packing& packing, const Scene& scene, const RelaxP
       << "STEPS_PER_CHECK = " << sched.steps_per_check << "\n"
       << "AVERAGE_EVERY = " << sched.average_every << "  # steps between samples of the mean\n"
       << "MAX_CHECKS = " << sched.max_checks << "  # max_time " << num(plan.max_time) << " s\n"
-      << "ARMING_TIME = " << num(sched.arming_time) << "  # s, sqrt(2 r_min / g)\n\n\n"
+      << "ARMING_TIME = " << num(sched.arming_time) << "  # s, sqrt(2 r_min / g)\n"
+      << "VERLET_DIST = " << num(verlet) << "  # m, collider's bounding-box margin: "
+      << (verlet < 0.5 * st.r_min ? "below half the period with the largest grain" : "0.5 r_min") << "\n\n\n"
       << "def scene():\n";
 
   // Materials: elastic constants and density per species, then the walls'.
@@ -249,12 +279,8 @@ std::string yade_script(const Packing& packing, const Scene& scene, const RelaxP
   }
   if (rolling > 0) out << rolling_call(scene, st, rolling);
 
-  const Container& box = scene.container;
   if (box.kind == ContainerKind::Periodic) {
-    // 2D: a y period wide enough that no disk meets its own image; z: far above the packing.
-    const double ly = scene.dimension == 2 ? 8.0 * st.r_max : box.size_y;
-    const double lz = std::max(2.0 * box.height, 4.0 * st.top);
-    out << "    periodic_cell(" << num(box.size_x) << ", " << num(ly) << ", " << num(lz)
+    out << "    periodic_cell(" << num(box.size_x) << ", " << num(period_y) << ", " << num(period_z)
         << ")  # the container's period" << (scene.dimension == 2 ? " in x" : "s in x and y")
         << "; z: 4x the packing top\n";
   }

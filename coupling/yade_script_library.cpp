@@ -63,7 +63,7 @@ try:
                               Ig2_Wall_Sphere_ScGeom, InsertionSortCollider, InteractionLoop,
                               Ip2_FrictMat_FrictMat_MindlinPhys, Ip2_ViscElMat_ViscElMat_ViscElPhys,
                               Law2_ScGeom_MindlinPhys_Mindlin, Law2_ScGeom_ViscElPhys_Basic, MatchMaker,
-                              NewtonIntegrator, ViscElMat)
+                              NewtonIntegrator, PyRunner, ViscElMat)
 except ImportError as exc:
     log("cannot import yade (%s): run with PYTHONPATH=/usr/lib/x86_64-linux-gnu/yade-double/py, "
         "or with `yade -n -x %s`" % (exc, os.path.basename(sys.argv[0])))
@@ -79,6 +79,7 @@ _walls = []          # body ids of walls, facets and the periodic floor
 _cell = None         # (Lx, Ly, Lz) when periodic
 _rolling = None      # dict(krot=, eta=) for the Hertz-Mindlin moment law; None = no rolling term
 _history = []        # [(time, translational kinetic energy)] at t = 0 and at every check
+_loop_seconds = 0.0  # wall time of the time-stepping loop alone
 
 
 def add_material(label, young, poisson, density, species=None):
@@ -193,7 +194,7 @@ def build_engines():
         ip2 = Ip2_ViscElMat_ViscElMat_ViscElPhys(en=en, frictAngle=friction_angle)
         law = Law2_ScGeom_ViscElPhys_Basic()
     collider = InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Wall_Aabb(), Bo1_Facet_Aabb(), Bo1_Box_Aabb()],
-                                     label="collider")
+                                     verletDist=VERLET_DIST, label="collider")
     if _cell is not None:
         # The floor box is wider than the cell: sweep along z, where it is thin.
         collider.allowBiggerThanPeriod = True
@@ -255,54 +256,112 @@ def write_status(status, reason, message, wall):
         "status": status, "stop_reason": reason, "message": message,
         "time": O.time, "steps": steps, "timestep": O.dt, "wall_seconds": wall,
         "steps_per_second": steps / wall if wall > 0 else 0.0,
+        "loop_seconds": _loop_seconds,
+        "loop_steps_per_second": steps / _loop_seconds if _loop_seconds > 0 else 0.0,
         "grains": len(_grains), "bodies": len(O.bodies), "threads": O.numThreads,
         "yade_version": getattr(yade.config, "version", "unknown"), "model": MODEL,
     }, indent=1) + "\n")
 
 
+class StopRule:
+    """The stop rule of the LIGGGHTS script, step for step, run inside YADE's loop by a PyRunner every
+    AVERAGE_EVERY steps (so YADE runs whole chunks of steps without returning to Python): the translational
+    kinetic energy E is sampled after every AVERAGE_EVERY-th step; every STEPS_PER_CHECK steps E and the mean
+    of the last STEPS_PER_CHECK / AVERAGE_EVERY samples are compared with KINETIC_THRESHOLD. The run stops
+    when both are below it, once armed (the mean was above the threshold once, or t >= ARMING_TIME);
+    otherwise after MAX_CHECKS checks (max-time). A sample above KINETIC_BOUND is a blow-up.
+    The PyRunner runs during a step, after NewtonIntegrator: that step ends at O.iter + 1, O.time + O.dt.
+    It never raises (an exception would stop YADE with a bare "PyRunner error"): it records the reason or
+    the failure and pauses the run."""
+
+    def __init__(self):
+        self.samples = STEPS_PER_CHECK // AVERAGE_EVERY
+        self.total = 0.0
+        self.count = 0
+        self.checks = 0
+        self.armed = False
+        self.bodies = len(O.bodies)
+        self.reason = None
+        self.failure = None
+        self.next_report = time.time() + 10.0
+
+    def sample(self):
+        try:
+            self._sample()
+        except Exception as exc:
+            self.failure = exc if isinstance(exc, RunFailure) else RunFailure(
+                "%s: %s\n%s" % (type(exc).__name__, exc, traceback.format_exc()))
+            O.pause()
+
+    def _sample(self):
+        e = translational_kinetic_energy()
+        t, step = O.time + O.dt, O.iter + 1  # at the end of this step
+        # Bound and NaN at every sample, not only at checks: after a blow-up YADE's periodic collider can
+        # spin for hours on grains flung across many periods before the next check comes.
+        if not math.isfinite(e) or e > KINETIC_BOUND:
+            _history.append((t, e))
+            if not math.isfinite(e):
+                raise RunFailure("kinetic energy is %r at t = %.6g s (step %d)" % (e, t, step))
+            raise RunFailure("blow-up: kinetic energy %.6g J above the bound %.6g J (twice the energy the packing "
+                             "holds) at t = %.6g s (step %d)" % (e, KINETIC_BOUND, t, step))
+        self.total += e
+        self.count += 1
+        if self.count < self.samples:
+            return
+        mean = self.total / self.samples
+        self.total, self.count = 0.0, 0
+        self.checks += 1
+        _history.append((t, e))
+        if not math.isfinite(mean):
+            raise RunFailure("mean kinetic energy is %r at t = %.6g s (step %d)" % (mean, t, step))
+        if len(O.bodies) != self.bodies:
+            raise RunFailure("bodies were lost: %d left of %d" % (len(O.bodies), self.bodies))
+        if mean >= KINETIC_THRESHOLD:
+            self.armed = True
+        if (self.armed or t >= ARMING_TIME) and mean < KINETIC_THRESHOLD and e < KINETIC_THRESHOLD:
+            self.reason = "kinetic-energy"
+        elif self.checks >= MAX_CHECKS:
+            self.reason = "max-time"
+        if self.reason is not None:
+            O.pause()  # YADE stops once this step is complete
+            return
+        if time.time() >= self.next_report:
+            self.next_report = time.time() + 10.0
+            log("t = %.6g s, step %d, kinetic energy %.6g J (%.3g x threshold)" % (
+                t, step, e, e / KINETIC_THRESHOLD))
+
+
+_rule = None
+
+
 def relax():
-    """The stop rule of the LIGGGHTS script, step for step: every STEPS_PER_CHECK steps the translational
-    kinetic energy E and its mean over the last STEPS_PER_CHECK steps (sampled every AVERAGE_EVERY steps) are
-    compared with KINETIC_THRESHOLD; the run stops when both are below it, once armed (the mean was above the
-    threshold once, or t >= ARMING_TIME); otherwise after MAX_CHECKS checks (max-time). E above KINETIC_BOUND
-    is a blow-up."""
+    """Runs the relaxation in one O.run() call (the StopRule's PyRunner pauses it) and returns the stop
+    reason; the wall time of the loop alone is in _loop_seconds."""
+    global _rule, _loop_seconds
     build_engines()
     O.dt = TIMESTEP
-    n_bodies = len(O.bodies)
     log("YADE %s, %d threads, model %s, %d grains, %d wall bodies" % (
         getattr(yade.config, "version", "?"), O.numThreads, MODEL, len(_grains), len(_walls)))
     log("time step %.6g s: %s (YADE's P-wave estimate: %.6g s)" % (TIMESTEP, TIMESTEP_RULE, utils.PWaveTimeStep()))
     log("stop: E and its mean < %.6g J every %d steps, armed at t >= %.6g s; at most %d checks; blow-up above %.6g J"
         % (KINETIC_THRESHOLD, STEPS_PER_CHECK, ARMING_TIME, MAX_CHECKS, KINETIC_BOUND))
-    samples = STEPS_PER_CHECK // AVERAGE_EVERY
     _history.append((0.0, sum(0.5 * O.bodies[b].state.mass * O.bodies[b].state.vel.squaredNorm() for _, b in _grains)))
-    armed = False
-    next_report = time.time() + 10.0
-    for _check in range(MAX_CHECKS):
-        total = 0.0
-        for _sample in range(samples):
-            for _step in range(AVERAGE_EVERY):
-                O.step()
-            total += translational_kinetic_energy()
-        mean = total / samples
-        e = translational_kinetic_energy()
-        _history.append((O.time, e))
-        if not (math.isfinite(e) and math.isfinite(mean)):
-            raise RunFailure("kinetic energy is %r at t = %.6g s (step %d)" % (e, O.time, O.iter))
-        if e > KINETIC_BOUND:
-            raise RunFailure("blow-up: kinetic energy %.6g J above the bound %.6g J (twice the energy the packing "
-                             "holds) at t = %.6g s (step %d)" % (e, KINETIC_BOUND, O.time, O.iter))
-        if len(O.bodies) != n_bodies:
-            raise RunFailure("bodies were lost: %d left of %d" % (len(O.bodies), n_bodies))
-        if mean >= KINETIC_THRESHOLD:
-            armed = True
-        if (armed or O.time >= ARMING_TIME) and mean < KINETIC_THRESHOLD and e < KINETIC_THRESHOLD:
-            return "kinetic-energy"
-        if time.time() >= next_report:
-            next_report = time.time() + 10.0
-            log("t = %.6g s, step %d, kinetic energy %.6g J (%.3g x threshold)" % (
-                O.time, O.iter, e, e / KINETIC_THRESHOLD))
-    return "max-time"
+    _rule = StopRule()
+    # PyRunner commands run in __main__, which is not this script's namespace under the `yade` launcher.
+    import __main__
+    __main__._btr_stop_rule = _rule
+    # First run after AVERAGE_EVERY steps (at O.iter = AVERAGE_EVERY - 1), then every AVERAGE_EVERY steps;
+    # nDone = 1 skips PeriodicEngine's bookkeeping first call, which would reset iterLast to 0.
+    O.engines = O.engines + [PyRunner(command="_btr_stop_rule.sample()", iterPeriod=AVERAGE_EVERY,
+                                      iterLast=O.iter - 1, nDone=1, label="stop_rule")]
+    t0 = time.time()
+    O.run(MAX_CHECKS * STEPS_PER_CHECK, True)  # returns when the rule pauses YADE (or at the last step)
+    _loop_seconds = time.time() - t0
+    if _rule.failure is not None:
+        raise _rule.failure
+    if _rule.reason is None:
+        raise RunFailure("the run ended after %d steps without a stop-rule decision" % O.iter)
+    return _rule.reason
 
 
 def main():
@@ -315,8 +374,8 @@ def main():
                 raise RunFailure("grain %d fell through the floor (z = %.6g m)" % (gid, O.bodies[bid].state.pos[2]))
         write_outputs()
         wall = time.time() - t0
-        log("stopped by %s at t = %.6g s after %d steps, %.3g s wall time (%.4g steps/s)" % (
-            reason, O.time, O.iter, wall, O.iter / wall if wall > 0 else 0.0))
+        log("stopped by %s at t = %.6g s after %d steps, %.3g s wall time, %.3g s of them stepping (%.4g steps/s)" % (
+            reason, O.time, O.iter, wall, _loop_seconds, O.iter / _loop_seconds if _loop_seconds > 0 else 0.0))
         write_status("ok", reason, "", wall)
         return 0
     except Exception as exc:

@@ -1,6 +1,7 @@
 // LIGGGHTS coupling: generated inputs, real relaxations in every container, failure detection.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -151,6 +152,37 @@ double threshold_by_hand(const btr::Grains& g, const btr::Scene& s) {
   return s.relax.stop_kinetic_ratio * sum;
 }
 
+// velocities.csv (id,vx,vy,vz) as written by relax(): one row per grain, ids 1..N in order, the values of
+// RelaxResult::velocities; returns their translational kinetic energy sum m v^2 / 2 (sphere masses).
+double check_velocities_file(const btr::Scene& scene, const btr::Packing& in, const btr::RelaxResult& r,
+                             const std::string& dir) {
+  EXPECT_EQ(r.velocities.size(), in.grains.size());
+  std::ifstream f(dir + "/velocities.csv");
+  std::string line;
+  EXPECT_TRUE(std::getline(f, line) && line == "id,vx,vy,vz") << line;
+  double energy = 0;
+  std::size_t rows = 0;
+  while (std::getline(f, line)) {
+    long id = 0;
+    double v[3];
+    EXPECT_EQ(std::sscanf(line.c_str(), "%ld,%lf,%lf,%lf", &id, &v[0], &v[1], &v[2]), 4) << line;
+    ++rows;
+    EXPECT_EQ(id, static_cast<long>(rows));
+    if (rows > in.grains.size() || rows > r.velocities.size()) break;
+    const btr::Vec3 vel(v[0], v[1], v[2]);
+    EXPECT_TRUE(vel.allFinite()) << line;
+    EXPECT_EQ(vel, r.velocities[rows - 1]) << "%.17g round trip, row " << rows;
+    if (scene.dimension == 2) {
+      EXPECT_EQ(vel.y(), 0.0) << "2D grains do not move along y";
+    }
+    const btr::Grain& g = in.grains[rows - 1];
+    const double m = 4.0 / 3.0 * M_PI * g.r * g.r * g.r * scene.grains.components[g.species - 1].density;
+    energy += 0.5 * m * vel.squaredNorm();
+  }
+  EXPECT_EQ(rows, in.grains.size());
+  return energy;
+}
+
 void check_relaxation(const Case& c, const btr::Scene& scene, const btr::Packing& in, const btr::RelaxResult& r,
                       const std::string& dir) {
   EXPECT_EQ(r.stop_reason, "kinetic-energy") << "it should settle before max_time";
@@ -175,6 +207,9 @@ void check_relaxation(const Case& c, const btr::Scene& scene, const btr::Packing
   EXPECT_LT(largest_wall_overlap(out.grains, c.container, c.dimension), 0.01);
   ASSERT_FALSE(r.kinetic_history.empty());
   EXPECT_LT(r.kinetic_history.back().second, threshold_by_hand(in.grains, scene));
+  // The final dump's velocities are those of the last thermo row: the same kinetic energy.
+  const double ke = check_velocities_file(scene, in, r, dir);
+  EXPECT_NEAR(ke, r.kinetic_history.back().second, 1e-9 * r.kinetic_history.back().second);
   EXPECT_EQ(out.meta["relax"]["stop_reason"], "kinetic-energy");
   // The floor carries the weight where there are no side walls to share it (static balance).
   if (c.container.kind == ContainerKind::Open || c.container.kind == ContainerKind::Periodic) {

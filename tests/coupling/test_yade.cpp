@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -12,6 +13,8 @@
 #include <set>
 #include <sstream>
 
+#include "btr/run_scene.h"
+#include "btr/scene_toml.h"
 #include "coupling/overlap.h"
 #include "coupling/relax.h"
 #include "coupling/relax_plan.h"
@@ -39,6 +42,8 @@ struct Case {
   btr::Container container;
   int grains;
 };
+
+void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
 
 std::vector<Case> all_cases() {
   return {
@@ -159,6 +164,37 @@ double threshold_by_hand(const btr::Grains& g, const btr::Scene& s) {
   return s.relax.stop_kinetic_ratio * sum;
 }
 
+// velocities.csv (id,vx,vy,vz) as written by relax(): one row per grain, ids 1..N in order, the values of
+// RelaxResult::velocities; returns their translational kinetic energy sum m v^2 / 2 (sphere masses).
+double check_velocities_file(const btr::Scene& scene, const btr::Packing& in, const btr::RelaxResult& r,
+                             const std::string& dir) {
+  EXPECT_EQ(r.velocities.size(), in.grains.size());
+  std::ifstream f(dir + "/velocities.csv");
+  std::string line;
+  EXPECT_TRUE(std::getline(f, line) && line == "id,vx,vy,vz") << line;
+  double energy = 0;
+  std::size_t rows = 0;
+  while (std::getline(f, line)) {
+    long id = 0;
+    double v[3];
+    EXPECT_EQ(std::sscanf(line.c_str(), "%ld,%lf,%lf,%lf", &id, &v[0], &v[1], &v[2]), 4) << line;
+    ++rows;
+    EXPECT_EQ(id, static_cast<long>(rows));
+    if (rows > in.grains.size() || rows > r.velocities.size()) break;
+    const btr::Vec3 vel(v[0], v[1], v[2]);
+    EXPECT_TRUE(vel.allFinite()) << line;
+    EXPECT_EQ(vel, r.velocities[rows - 1]) << "%.17g round trip, row " << rows;
+    if (scene.dimension == 2) {
+      EXPECT_EQ(vel.y(), 0.0) << "2D grains do not move along y";
+    }
+    const btr::Grain& g = in.grains[rows - 1];
+    const double m = 4.0 / 3.0 * M_PI * g.r * g.r * g.r * scene.grains.components[g.species - 1].density;
+    energy += 0.5 * m * vel.squaredNorm();
+  }
+  EXPECT_EQ(rows, in.grains.size());
+  return energy;
+}
+
 void check_relaxation(const Case& c, const btr::Scene& scene, const btr::Packing& in, const btr::RelaxResult& r,
                       const std::string& dir) {
   EXPECT_EQ(r.stop_reason, "kinetic-energy") << "it should settle before max_time";
@@ -184,6 +220,12 @@ void check_relaxation(const Case& c, const btr::Scene& scene, const btr::Packing
   ASSERT_FALSE(r.kinetic_history.empty());
   EXPECT_EQ(r.kinetic_history.front().first, 0.0);
   EXPECT_LT(r.kinetic_history.back().second, threshold_by_hand(in.grains, scene));
+  // YADE's kinTrans is taken half a step before the final velocities (leapfrog): the same order of
+  // magnitude, and at rest by the stop rule's measure.
+  const double ke = check_velocities_file(scene, in, r, dir), last = r.kinetic_history.back().second;
+  EXPECT_GT(ke, 0.1 * last);
+  EXPECT_LT(ke, 10.0 * last);
+  EXPECT_LT(ke, 10.0 * threshold_by_hand(in.grains, scene));
   EXPECT_EQ(out.meta["relax"]["stop_reason"], "kinetic-energy");
   EXPECT_EQ(out.meta["relax"]["engine"], "yade");
   // The floor carries the weight where there are no side walls to share it (static balance).
@@ -223,6 +265,23 @@ TEST_P(YadeContainers, ScriptMatchesTheContainer) {
     EXPECT_EQ(cell.rfind("    periodic_cell(" + g17(c.container.size_x) + ", " + period_y, 0), 0u) << cell;
   } else {
     EXPECT_EQ(cell, "");
+  }
+  // The collider's margin: YADE's default 0.5 r_min, less if needed to keep every grain's bounding box
+  // below half of each period (else YADE may pair grains across the boundary with the wrong image).
+  const std::string verlet = line_starting(script, "VERLET_DIST = ");
+  ASSERT_FALSE(verlet.empty());
+  const double vd = std::stod(verlet.substr(14));
+  double r_min = 1, r_max = 0;
+  for (const btr::Grain& q : p.grains) r_min = std::min(r_min, q.r), r_max = std::max(r_max, q.r);
+  EXPECT_GT(vd, 0.0);
+  EXPECT_LE(vd, 0.5 * r_min);
+  if (c.container.kind == ContainerKind::Periodic) {
+    EXPECT_LT(2 * (r_max + vd), 0.5 * c.container.size_x);
+    if (c.dimension == 3) {
+      EXPECT_LT(2 * (r_max + vd), 0.5 * c.container.size_y);
+    }
+  } else {
+    EXPECT_EQ(vd, 0.5 * r_min);
   }
   EXPECT_EQ(line_starting(script, "DIMENSION = "), "DIMENSION = " + std::to_string(c.dimension));
   EXPECT_EQ(line_starting(script, "MODEL = "), "MODEL = \"hertz\"");
@@ -450,20 +509,30 @@ TEST(Yade, ReadBackRejectsMissingAndBadOutputs) {
                                                   "steps": 50000, "wall_seconds": 1.0})";
   expect_failure("missing output");
 
+  // Grains 4 mm apart along x on the floor (grain 2 at x_of_grain_2), velocity (i, -2i, 3i) mm/s.
   auto final_rows = [&](double x_of_grain_2) {
     std::ofstream f(dir + "/yade_final.csv");
     f << "id,x,y,z,vx,vy,vz\n";
-    for (std::size_t i = 0; i < p.grains.size(); ++i)
-      f << i + 1 << "," << g17(i == 1 ? x_of_grain_2 : 0.0) << ",0," << g17(p.grains[i].r) << ",0,0,0\n";
+    for (std::size_t i = 0; i < p.grains.size(); ++i) {
+      const double v = 1e-3 * static_cast<double>(i + 1);
+      f << i + 1 << "," << g17(i == 1 ? x_of_grain_2 : 0.004 * (static_cast<double>(i) - 1.0)) << ",0,"
+        << g17(p.grains[i].r) << "," << g17(v) << "," << g17(-2 * v) << "," << g17(3 * v) << "\n";
+    }
   };
   std::ofstream(dir + "/yade_kinetic.csv") << "time,kinetic_energy\n0,0\n0.05,1e-12\n";
   std::ofstream(dir + "/yade_contacts.csv") << "i,j,fn,overlap\n1,0,1e-4,1e-7\n";
   final_rows(0.011);  // beyond the wall x = +0.01
   expect_failure("grain 2 left the container");
+  final_rows(-0.0039);  // nearly on top of grain 1: a contact YADE missed
+  expect_failure("grains went into each other");
   final_rows(0.0);
   const btr::RelaxResult ok = adapter->read_back(dir, p, scene, plan);
   EXPECT_EQ(ok.stop_reason, "kinetic-energy");
   EXPECT_EQ(ok.relaxed.grains.size(), 3u);
+  ASSERT_EQ(ok.velocities.size(), 3u);
+  const double v3 = 1e-3 * 3.0;  // as written for grain 3
+  EXPECT_EQ(ok.velocities[2], btr::Vec3(v3, -2 * v3, 3 * v3));
+  EXPECT_EQ(ok.relaxed.grains[2].x, btr::Vec3(0.004, 0, p.grains[2].r));
   ASSERT_EQ(ok.contacts.size(), 1u);
   EXPECT_EQ(ok.contacts[0].j, 0);
   EXPECT_EQ(ok.kinetic_history.size(), 2u);
@@ -480,4 +549,72 @@ TEST(Yade, ReadBackRejectsMissingAndBadOutputs) {
   expect_failure("lost grains");
   std::ofstream(dir + "/yade_status.json") << R"({"status": "failed", "message": "something broke"})";
   expect_failure("something broke");
+}
+
+// A period of at most 4 largest radii cannot be given to YADE: a grain there spans half the period and
+// may touch two images of another grain, and YADE keeps one interaction (one image) per pair.
+TEST(Yade, PeriodNarrowerThanFourRadiiIsRefused) {
+  const btr::Scene scene = btr_test::make_scene("narrow", 3, container(ContainerKind::Periodic, 0.02, 0.0038));
+  btr::Packing p = btr_test::layered_packing(scene, 2, 3);
+  for (btr::Grain& g : p.grains) g.r = 1e-3;  // 4 r_max = 4 mm > 3.8 mm; no overlap (2 grains, 3.8 mm apart at least)
+  p.grains[0].x = btr::Vec3(-0.004, 0, 1.1e-3);
+  p.grains[1].x = btr::Vec3(0.004, 0, 1.1e-3);
+  const std::string dir = btr_test::fresh_dir("yade_narrow");
+  try {
+    btr::export_inputs(p, scene, "yade", {}, dir);
+    FAIL() << "expected a refusal";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("container.size"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("0.0038"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir + "/relax_yade.py"));
+}
+
+namespace {
+
+// The stability sweep's case: equal grains of radius 1 mm rained into a 6 mm periodic cell.
+btr::Scene equal_grains_periodic_scene() {
+  btr::Scene scene = btr::load_scene(std::string(BTR_SOURCE_DIR) + "/inputs/bed3d.toml");
+  scene.grains.components[0].radius.kind = btr::RadiusSpec::Kind::Constant;
+  scene.grains.components[0].radius.value = 1e-3;
+  scene.container.size_x = scene.container.size_y = 0.006;
+  scene.relax.max_time = 0.1;
+  return scene;
+}
+
+}  // namespace
+
+// Regression: with YADE's default collider margin (0.5 r_min) each grain's bounding box spans half of
+// this 6 mm period; YADE's collider then pairs two grains touching across the y boundary with the wrong
+// image, and one fell through the other (overlap 1.99 r, the grains nearly at the same place).
+TEST(Yade, EqualGrainsMeetAcrossThePeriodicBoundary) {
+  if (!have_yade()) GTEST_SKIP() << "yade Python module not installed";
+  const btr::Scene scene = equal_grains_periodic_scene();
+  btr::Packing p;
+  p.grains = btr::run_scene(scene, 1, 60, {}).grains;
+  p.meta = {{"scene", btr::scene_to_json(scene)}};
+  ASSERT_LT(largest_pair_overlap(p.grains, scene.container, 3), 1e-9) << "a BTR packing touches exactly";
+
+  const std::string dir = btr_test::fresh_dir("yade_equal_periodic");
+  const btr::RelaxResult r = btr::relax(p, scene, "yade", {}, dir);
+  EXPECT_LT(largest_pair_overlap(r.relaxed.grains, scene.container, 3), 0.02);
+  EXPECT_LT(largest_wall_overlap(r.relaxed.grains, scene.container, 3), 0.02);
+  const std::string verlet = line_starting(read_text(dir + "/relax_yade.py"), "VERLET_DIST = ");
+  ASSERT_FALSE(verlet.empty());
+  EXPECT_LT(2 * (1e-3 + std::stod(verlet.substr(14))), 0.5 * 0.006);
+
+  // The same run with YADE's default margin: the read-back reports the grains that went into each other.
+  const std::string bad = btr_test::fresh_dir("yade_equal_periodic_default_margin");
+  const auto adapter = btr::make_adapter("yade");
+  const btr::RelaxPlan plan = btr::make_plan(p, scene, {});
+  btr::write_engine_inputs(p, scene, *adapter, {}, plan, bad);
+  const std::string script = read_text(bad + "/relax_yade.py");
+  std::ofstream(bad + "/relax_yade.py") << replace_once(script, verlet, "VERLET_DIST = 0.0005");
+  try {
+    btr::run_engine_inputs(p, scene, *adapter, "yade", {}, plan, bad);
+    ADD_FAILURE() << "YADE's default margin gave no lost contact here; the regression no longer shows";
+  } catch (const btr::EngineFailure& e) {
+    EXPECT_NE(std::string(e.what()).find("grains went into each other"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(bad + "/relaxed.csv"));
 }
