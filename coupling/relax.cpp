@@ -103,10 +103,12 @@ double kinetic_energy_bound(const Grains& grains, const Scene& scene) {
   return 2.0 * energy;
 }
 
-RelaxPlan make_plan(const Packing& packing, const Scene& scene, const RelaxSettings& settings) {
+RelaxPlan make_plan(const Packing& packing, const Scene& scene, const RelaxSettings& settings,
+                    const std::string& engine) {
   check_inputs(packing, scene);
   RelaxPlan plan;
-  const StableStep stable = stable_timestep(packing.grains, scene);
+  const StableStep stable = stable_timestep(packing.grains, scene,
+                                            engine == "yade" ? DampedMode::TangentialSameDashpot : DampedMode::Normal);
   const std::optional<double> requested = settings.timestep ? settings.timestep : scene.relax.timestep;
   if (requested) {
     if (!(*requested > 0.0)) throw RelaxRefused("requested time step must be positive, got " + g6(*requested));
@@ -285,14 +287,14 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
 std::vector<std::string> export_inputs(const Packing& packing, const Scene& scene, const std::string& engine,
                                        const RelaxSettings& settings, const std::string& dir) {
   const auto adapter = make_adapter(engine);
-  const RelaxPlan plan = make_plan(packing, scene, settings);
+  const RelaxPlan plan = make_plan(packing, scene, settings, engine);
   return write_engine_inputs(packing, scene, *adapter, settings, plan, dir);
 }
 
 RelaxResult relax(const Packing& packing, const Scene& scene, const std::string& engine,
                   const RelaxSettings& settings, const std::string& out_dir) {
   const auto adapter = make_adapter(engine);
-  const RelaxPlan plan = make_plan(packing, scene, settings);
+  const RelaxPlan plan = make_plan(packing, scene, settings, engine);
   write_engine_inputs(packing, scene, *adapter, settings, plan, out_dir);
   return run_engine_inputs(packing, scene, *adapter, engine, settings, plan, out_dir);
 }

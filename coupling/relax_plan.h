@@ -22,7 +22,9 @@ std::unique_ptr<EngineAdapter> make_adapter(const std::string& engine);
 // Time step (stable step, or the requested one if it is not above it), stop threshold and the
 // largest initial overlap. Throws RelaxRefused for a requested step above the stable one or an
 // overlap above settings.max_overlap, each with the number that would be accepted.
-RelaxPlan make_plan(const Packing& packing, const Scene& scene, const RelaxSettings& settings);
+// `engine` ("liggghts" | "yade") decides which contact mode's damping limits the step (timestep.h).
+RelaxPlan make_plan(const Packing& packing, const Scene& scene, const RelaxSettings& settings,
+                    const std::string& engine);
 
 // The stop rule's threshold: ratio * sum_i m_i g d_i (d_i the diameter, m_i a sphere's mass).
 double kinetic_threshold(const Grains& grains, const Scene& scene);

@@ -74,18 +74,27 @@ double hooke_characteristic_velocity(const Grains& grains) {
   return std::sqrt(2.0 * kGravity * 2.0 * r_max);
 }
 
-StableStep stable_timestep(const Grains& grains, const Scene& scene) {
+StableStep stable_timestep(const Grains& grains, const Scene& scene, DampedMode mode) {
   if (grains.empty()) throw std::runtime_error("the packing has no grains: no time step can be derived");
   const auto& comps = scene.grains.components;
   const auto ranges = radius_ranges(grains, scene);
   StableStep s;
   s.fraction = scene.relax.timestep_fraction;
   const double e_low = lowest_restitution(scene);
-  const double zeta = damping_ratio(e_low);
+  double zeta = damping_ratio(e_low);
+  std::string which = "normal";
+  if (mode == DampedMode::TangentialSameDashpot) {
+    double kappa = 1.0;  // linear law: ks = kn
+    if (scene.relax.model == "hertz")
+      for (const Component& c : comps)
+        kappa = std::min(kappa, 2.0 * (1.0 - c.material.poisson) / (2.0 - c.material.poisson));
+    zeta *= std::sqrt(7.0 / (2.0 * kappa));
+    which = "tangential, same dashpot as the normal one";
+  }
   const double verlet = std::sqrt(1.0 + zeta * zeta) - zeta;
   auto damping_note = [&]() {
-    return " x damping factor " + fmt(s.damping_factor) + " (lowest restitution " + fmt(e_low) + ", zeta = " + fmt(zeta) +
-           ")";
+    return " x damping factor " + fmt(s.damping_factor) + " (lowest restitution " + fmt(e_low) + ", " + which +
+           " damping ratio " + fmt(zeta) + ")";
   };
 
   if (scene.relax.model == "hertz") {

@@ -40,7 +40,14 @@ struct StableStep {
   std::string rule;                  // one line naming the rule, the grain(s) and the numbers
 };
 
+// Which damping ratio sets the damping factor. LIGGGHTS damps the tangential motion with its own
+// coefficient; YADE's Hertz-Mindlin and linear laws put the normal viscous coefficient on the
+// tangential dashpot too, where the mode of a rolling sphere has mass 2/7 m and stiffness kappa k_n
+// (Hertz-Mindlin: kappa = 2 (1 - nu) / (2 - nu); linear law: kappa = 1), so its damping ratio is
+// sqrt(7 / (2 kappa)) times the normal one.
+enum class DampedMode { Normal, TangentialSameDashpot };
+
 // Throws std::runtime_error for an empty packing or a species the scene does not have.
-StableStep stable_timestep(const Grains& grains, const Scene& scene);
+StableStep stable_timestep(const Grains& grains, const Scene& scene, DampedMode mode = DampedMode::Normal);
 
 }  // namespace btr

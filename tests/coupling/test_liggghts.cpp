@@ -358,7 +358,7 @@ void run_broken(const std::string& name, const std::function<std::string(std::st
   const btr::Packing p = btr_test::layered_packing(scene, 100, 9);
   const std::string dir = btr_test::fresh_dir(name);
   const auto adapter = btr::make_adapter("liggghts");
-  const btr::RelaxPlan plan = btr::make_plan(p, scene, {});
+  const btr::RelaxPlan plan = btr::make_plan(p, scene, {}, "liggghts");
   btr::write_engine_inputs(p, scene, *adapter, {}, plan, dir);
   const std::string script_path = dir + "/in.btr";
   const std::string broken = edit(read_text(script_path));
@@ -423,7 +423,7 @@ TEST(Liggghts, RayleighTimeAgreesWithLiggghtsCheck) {
   scene.grains.components[0].material.poisson = 0.2;
   const btr::Packing p = btr_test::layered_packing(scene, 30, 1);
   const std::string dir = btr_test::fresh_dir("glass_check");
-  const btr::RelaxPlan plan = btr::make_plan(p, scene, {});
+  const btr::RelaxPlan plan = btr::make_plan(p, scene, {}, "liggghts");
   btr::export_inputs(p, scene, "liggghts", {}, dir);
   std::string s = read_text(dir + "/in.btr");
   EXPECT_NE(s.find("hard_particles  yes\n"), std::string::npos);

@@ -119,7 +119,7 @@ TEST(Plan, KineticThresholdByHand) {
 TEST(Plan, RequestedTimestepAboveTheStableOneIsRefusedWithTheStableValue) {
   btr::Scene s = btr_test::make_scene("ts", 3, container(ContainerKind::Periodic));
   const btr::Packing p = btr_test::layered_packing(s, 40, 1);
-  const btr::RelaxPlan free_plan = btr::make_plan(p, s, {});
+  const btr::RelaxPlan free_plan = btr::make_plan(p, s, {}, "liggghts");
   const double stable = free_plan.timestep;
   char stable_text[32];
   std::snprintf(stable_text, sizeof stable_text, "%.6g", stable);
@@ -127,36 +127,36 @@ TEST(Plan, RequestedTimestepAboveTheStableOneIsRefusedWithTheStableValue) {
   btr::RelaxSettings too_big;
   too_big.timestep = 1.01 * stable;
   try {
-    btr::make_plan(p, s, too_big);
+    btr::make_plan(p, s, too_big, "liggghts");
     FAIL() << "accepted a step above the stable one";
   } catch (const btr::RelaxRefused& e) {
     EXPECT_NE(std::string(e.what()).find(stable_text), std::string::npos) << e.what();
   }
   btr::RelaxSettings fine;
   fine.timestep = 0.5 * stable;
-  EXPECT_EQ(btr::make_plan(p, s, fine).timestep, 0.5 * stable);
+  EXPECT_EQ(btr::make_plan(p, s, fine, "liggghts").timestep, 0.5 * stable);
   s.relax.timestep = 0.25 * stable;  // the scene may ask too; the command line wins
-  EXPECT_EQ(btr::make_plan(p, s, {}).timestep, 0.25 * stable);
-  EXPECT_EQ(btr::make_plan(p, s, fine).timestep, 0.5 * stable);
+  EXPECT_EQ(btr::make_plan(p, s, {}, "liggghts").timestep, 0.25 * stable);
+  EXPECT_EQ(btr::make_plan(p, s, fine, "liggghts").timestep, 0.5 * stable);
   s.relax.timestep = 2 * stable;
-  EXPECT_THROW(btr::make_plan(p, s, {}), btr::RelaxRefused);
+  EXPECT_THROW(btr::make_plan(p, s, {}, "liggghts"), btr::RelaxRefused);
 }
 
 TEST(Plan, OverlapLimitAndOtherRefusals) {
   btr::Scene s = btr_test::make_scene("ov", 3, container(ContainerKind::Box, 0.01, 0.01));
   btr::Packing p;
   p.grains = {grain(0, 0, 1e-3, 1e-3), grain(1.96e-3, 0, 1e-3, 1e-3)};  // overlap 0.04 r
-  EXPECT_NEAR(btr::make_plan(p, s, {}).largest_overlap, 0.04, 1e-9);
+  EXPECT_NEAR(btr::make_plan(p, s, {}, "liggghts").largest_overlap, 0.04, 1e-9);
   btr::RelaxSettings strict;
   strict.max_overlap = 0.03;
-  EXPECT_THROW(btr::make_plan(p, s, strict), btr::RelaxRefused);
+  EXPECT_THROW(btr::make_plan(p, s, strict, "liggghts"), btr::RelaxRefused);
   p.grains[1].species = 7;
-  EXPECT_THROW(btr::make_plan(p, s, {}), btr::RelaxRefused);  // a species the scene does not have
+  EXPECT_THROW(btr::make_plan(p, s, {}, "liggghts"), btr::RelaxRefused);  // a species the scene does not have
   p.grains[1].species = 1;
   btr::Scene flat = btr_test::make_scene("2d", 2, container(ContainerKind::Box, 0.01));
-  EXPECT_NO_THROW(btr::make_plan(p, flat, {}));  // disks in y = 0
+  EXPECT_NO_THROW(btr::make_plan(p, flat, {}, "liggghts"));  // disks in y = 0
   p.grains[1].x.y() = 1e-9;
-  EXPECT_THROW(btr::make_plan(p, flat, {}), btr::RelaxRefused);
+  EXPECT_THROW(btr::make_plan(p, flat, {}, "liggghts"), btr::RelaxRefused);
   EXPECT_THROW(btr::make_adapter("lammps"), btr::RelaxRefused);
 }
 
@@ -247,7 +247,7 @@ struct FakeRun {
     };
   }
   btr::RelaxResult run() {
-    const btr::RelaxPlan plan = btr::make_plan(packing, scene, settings);
+    const btr::RelaxPlan plan = btr::make_plan(packing, scene, settings, "liggghts");
     btr::write_engine_inputs(packing, scene, adapter, settings, plan, dir);
     return btr::run_engine_inputs(packing, scene, adapter, "fake", settings, plan, dir);
   }

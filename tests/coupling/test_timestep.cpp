@@ -112,3 +112,14 @@ TEST(Timestep, LowRestitutionShortensTheStep) {
   EXPECT_NEAR(st.step, 0.2 * 0.5249024 * 1.066317e-6, 1e-12);
   EXPECT_NE(st.rule.find("damping factor"), std::string::npos) << st.rule;
 }
+
+// YADE puts the normal dashpot on the tangential motion too: for glass (nu = 0.2) kappa = 2 (0.8) / 1.8
+// = 0.888889, the tangential damping ratio at e = 0.05 is 0.6901067 sqrt(7 / (2 kappa)) = 1.369388 and
+// the factor sqrt(1 + 1.369388^2) - 1.369388 = 0.3262604 (against 0.5249024 for the normal mode).
+TEST(Timestep, YadeTangentialDampingShortensTheStepFurther) {
+  const btr::Scene s = one_species(2500, 63e9, 0.2, 0.05, "hertz");
+  const btr::StableStep st = btr::stable_timestep(two_grains(1e-3, 1e-3), s, btr::DampedMode::TangentialSameDashpot);
+  EXPECT_NEAR(st.damping_factor, 0.3262604, 1e-6);
+  EXPECT_NEAR(st.step, 0.2 * 0.3262604 * 1.066317e-6, 1e-12);
+  EXPECT_NE(st.rule.find("tangential"), std::string::npos) << st.rule;
+}

@@ -419,7 +419,7 @@ std::string run_broken(const std::string& name, const std::string& file,
   const btr::Packing p = btr_test::layered_packing(scene, 100, 9);
   const std::string dir = btr_test::fresh_dir(name);
   const auto adapter = btr::make_adapter("yade");
-  const btr::RelaxPlan plan = btr::make_plan(p, scene, {});
+  const btr::RelaxPlan plan = btr::make_plan(p, scene, {}, "yade");
   btr::write_engine_inputs(p, scene, *adapter, {}, plan, dir);
   const std::string path = dir + "/" + file;
   const std::string broken = edit(read_text(path));
@@ -606,7 +606,7 @@ TEST(Yade, EqualGrainsMeetAcrossThePeriodicBoundary) {
   // The same run with YADE's default margin: the read-back reports the grains that went into each other.
   const std::string bad = btr_test::fresh_dir("yade_equal_periodic_default_margin");
   const auto adapter = btr::make_adapter("yade");
-  const btr::RelaxPlan plan = btr::make_plan(p, scene, {});
+  const btr::RelaxPlan plan = btr::make_plan(p, scene, {}, "yade");
   btr::write_engine_inputs(p, scene, *adapter, {}, plan, bad);
   const std::string script = read_text(bad + "/relax_yade.py");
   std::ofstream(bad + "/relax_yade.py") << replace_once(script, verlet, "VERLET_DIST = 0.0005");
