@@ -265,7 +265,7 @@ def timestep_rule_verdict(results) -> dict:
         summary = f"Time-step rule: all {len(allowed)} allowed cases passed"
     above = sum(1 for r in refused if "above the stable" in r["reason"])
     summary += (f"; {len(refused)} refused before any engine ran ({above} for a step above the stable one, "
-                f"{len(refused) - above} for values the engine cannot run)."
+                f"{len(refused) - above} for values the engine cannot run).")
     if wrongly_allowed:
         summary += " Steps above the stable one were NOT refused: " + ", ".join(
             f"{r['case']} / {r['engine']}" for r in wrongly_allowed) + "."
