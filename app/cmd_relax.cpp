@@ -52,7 +52,7 @@ Runner add_relax_command(CLI::App& app) {
                 << r.wall_seconds << " s wall time; final kinetic energy "
                 << (r.kinetic_history.empty() ? 0.0 : r.kinetic_history.back().second) << " J; " << r.contacts.size()
                 << " contacts\n"
-                << "wrote " << o->out << "/relaxed.csv (.json, .vtp), kinetic.csv, contacts.csv\n";
+                << "wrote " << o->out << "/relaxed.csv (.json, .vtp), kinetic.csv, contacts.csv, velocities.csv\n";
       return kSuccess;
     } catch (const btr::EngineFailure& e) {
       std::cerr << "btr relax: " << e.what() << "\n";
