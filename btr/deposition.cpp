@@ -75,6 +75,7 @@ struct Deposition::Impl {
   Grains grains;
   NeighbourGrid grid;
   double top = 0.0;  // highest grain top so far
+  std::vector<Obstacle> walls;  // the container as obstacles for the grain being placed (reused)
 
   Impl(int dim, const Container& c, double rmax, int events)
       : dimension(dim), container(c), r_max(rmax), max_events(events), grid(dim, c, rmax) {}
@@ -372,7 +373,7 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
   const std::string misfit = drop_misfit(container, dimension, px, py, r);
   if (!misfit.empty()) throw PlacementError(id, "dropped outside the container: " + misfit);
 
-  const std::vector<Obstacle> walls = container_walls(container, dimension, r);
+  container_walls(container, dimension, r, walls);
   Vec3 x(px, py, top + r + 2.0 * r_max);
   Contacts active;
   bool stable = false;

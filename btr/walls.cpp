@@ -17,8 +17,8 @@ Obstacle plane(int number, const Vec3& normal, double offset) {
 
 }  // namespace
 
-std::vector<Obstacle> container_walls(const Container& c, int dimension, double r) {
-  std::vector<Obstacle> walls;
+void container_walls(const Container& c, int dimension, double r, std::vector<Obstacle>& walls) {
+  walls.clear();
   walls.push_back(plane(0, Vec3::UnitZ(), r));  // the floor: z = r
   auto x_walls = [&](double half) {
     walls.push_back(plane(1, Vec3::UnitX(), -half + r));
@@ -49,7 +49,6 @@ std::vector<Obstacle> container_walls(const Container& c, int dimension, double 
       break;
     }
   }
-  return walls;
 }
 
 std::string drop_misfit(const Container& c, int dimension, double x, double y, double r) {

@@ -9,7 +9,8 @@
 namespace btr {
 
 // Floor first, then the side walls of the container (periodic and open containers have none).
-std::vector<Obstacle> container_walls(const Container& container, int dimension, double r);
+// Fills `walls` (cleared first), so the placement loop can reuse one buffer for every grain.
+void container_walls(const Container& container, int dimension, double r, std::vector<Obstacle>& walls);
 
 // Empty when a grain of radius r dropped at (x, y) fits the container's footprint, else why not.
 std::string drop_misfit(const Container& container, int dimension, double x, double y, double r);
