@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <sstream>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -14,6 +15,22 @@
 #include "relax_fixtures.h"
 
 namespace btr_test {
+
+// The whole of a text file (empty if it is missing).
+inline std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+inline std::string line_starting(const std::string& text, const std::string& prefix) {
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind(prefix, 0) == 0) return line;
+  return "";
+}
 
 struct Case {
   std::string name;
@@ -117,6 +134,45 @@ inline double check_velocities_file(const btr::Scene& scene, const btr::Packing&
   }
   EXPECT_EQ(rows, in.grains.size());
   return energy;
+}
+
+// Checks every engine's relaxation must pass; `out` receives the relaxed packing read back from dir.
+inline void check_relaxed_packing(const Case& c, const btr::Scene& scene, const btr::Packing& in,
+                                  const btr::RelaxResult& r, const std::string& dir, btr::Packing& out) {
+  EXPECT_EQ(r.stop_reason, "kinetic-energy") << "it should settle before max_time";
+  EXPECT_GT(r.simulated_time, 0.0);
+  EXPECT_LT(r.simulated_time, scene.relax.max_time);
+  out = btr::read_packing(dir + "/relaxed.csv");  // ids 1..N in order, checked there
+  ASSERT_EQ(out.grains.size(), in.grains.size());
+  double moved = 0, z_in = 0, z_out = 0;
+  for (std::size_t i = 0; i < in.grains.size(); ++i) {
+    EXPECT_EQ(out.grains[i].r, in.grains[i].r);
+    EXPECT_EQ(out.grains[i].species, in.grains[i].species);
+    if (c.dimension == 2) {
+      EXPECT_EQ(out.grains[i].x.y(), 0.0) << "2D grains stay in y = 0";
+    }
+    moved = std::max(moved, (out.grains[i].x - in.grains[i].x).norm());
+    z_in += in.grains[i].x.z();
+    z_out += out.grains[i].x.z();
+  }
+  EXPECT_GT(moved, 0.05e-3) << "the grains started above their supports and must have fallen";
+  EXPECT_LT(z_out, z_in) << "the bed settles";
+  EXPECT_LT(largest_pair_overlap(out.grains, c.container, c.dimension), 0.01);
+  EXPECT_LT(largest_wall_overlap(out.grains, c.container, c.dimension), 0.01);
+  ASSERT_FALSE(r.kinetic_history.empty());
+  EXPECT_EQ(r.kinetic_history.front().first, 0.0);
+  EXPECT_LT(r.kinetic_history.back().second, threshold_by_hand(in.grains, scene));
+  EXPECT_EQ(out.meta["relax"]["stop_reason"], "kinetic-energy");
+  EXPECT_GT(static_cast<long>(r.contacts.size()), static_cast<long>(in.grains.size()) / 2);
+  // The floor carries the weight where there are no side walls to share it (static balance).
+  if (c.container.kind == btr::ContainerKind::Open || c.container.kind == btr::ContainerKind::Periodic) {
+    double floor = 0, weight = 0;
+    for (const auto& k : r.contacts)
+      if (k.j == 0) floor += k.fn;
+    for (const btr::Grain& q : in.grains)
+      weight += 4.0 / 3.0 * M_PI * std::pow(q.r, 3) * scene.grains.components[q.species - 1].density * 9.81;
+    EXPECT_NEAR(floor / weight, 1.0, 0.02) << "floor force " << floor << " N, weight " << weight << " N";
+  }
 }
 
 }  // namespace btr_test
