@@ -7,6 +7,7 @@
 #include "commands.h"
 #include "coupling/relax.h"
 #include "load_packing.h"
+#include "measures_json.h"
 
 namespace btr_app {
 
@@ -47,7 +48,14 @@ Runner add_relax_command(CLI::App& app) {
       if (cmd->count("--timestep")) o->settings.timestep = o->timestep;
       if (cmd->count("--max-time")) p.scene.relax.max_time = o->max_time;
       const std::string engine = o->engine.empty() ? p.scene.relax.engine : o->engine;
-      const btr::RelaxResult r = btr::relax(p.packing, p.scene, engine, o->settings, o->out);
+      btr::RelaxResult r = btr::relax(p.packing, p.scene, engine, o->settings, o->out);
+      // The relaxed packing's measures, by the same definition as the deposit's, stored in relaxed.json.
+      const btr::Scene& sc = p.scene;
+      const bool point = sc.source.kind == btr::SourceSpec::Kind::Point;
+      const btr::PackingMeasures m = btr::measure_packing(r.relaxed.grains, sc.dimension, sc.container, {}, point,
+                                                          sc.source.x, sc.source.y);
+      r.relaxed.meta["measures"] = measures_to_json(m, sc.dimension);
+      btr::write_packing_meta(o->out, "relaxed", r.relaxed.meta);
       std::cout << engine << ": stopped by " << r.stop_reason << " at t = " << r.simulated_time << " s after "
                 << r.wall_seconds << " s wall time; final kinetic energy "
                 << (r.kinetic_history.empty() ? 0.0 : r.kinetic_history.back().second) << " J; " << r.contacts.size()

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
 
 namespace btr {
 namespace {
@@ -477,41 +478,68 @@ BulkMeasures bulk_measures(const Grains& grains, int dimension, const Container&
 
 namespace {
 
-struct ProfilePoint {
-  double distance, top;
-};
-
-// Highest grain per bin of `distance` (bins `width` wide); each point is that grain's own distance and top.
-std::vector<ProfilePoint> profile(const std::vector<ProfilePoint>& samples, double width) {
+// Profile bins of |distance| (one largest diameter wide), in order of distance, empty bins kept as
+// top < 0 so the pile can stop at the first gap.
+std::vector<ProfilePoint> binned_profile(const std::vector<ProfilePoint>& samples, double width) {
   std::vector<ProfilePoint> best;
-  std::vector<bool> used;
   for (const ProfilePoint& s : samples) {
-    std::size_t bin = static_cast<std::size_t>(s.distance / width);
-    if (bin >= best.size()) best.resize(bin + 1, {0.0, -1.0}), used.resize(bin + 1, false);
-    if (!used[bin] || s.top > best[bin].top) best[bin] = s, used[bin] = true;
+    const std::size_t bin = static_cast<std::size_t>(s.distance / width);
+    if (bin >= best.size()) best.resize(bin + 1, {0.0, -1.0});
+    if (s.top > best[bin].top) best[bin] = s;
   }
-  std::vector<ProfilePoint> out;
-  for (std::size_t b = 0; b < best.size(); ++b)
-    if (used[b]) out.push_back(best[b]);
-  return out;
+  return best;
 }
 
-// Angle (degrees) of the least-squares line through the points whose top lies in [lo, hi].
-bool fit_angle(const std::vector<ProfilePoint>& points, double lo, double hi, double& angle, int& used) {
+struct Flank {
+  bool ok = false;
+  double angle = 0.0;
+  int points = 0;
+  double foot = 0.0;  // distance of the last bin of the pile run that was looked at
+};
+
+// The flank of one side: walk from the apex bin outwards; fit from the first bin at or below hi to the
+// last bin before the profile falls below lo or meets an empty bin.
+Flank fit_flank(const std::vector<ProfilePoint>& bins, double lo, double hi) {
+  Flank f;
+  std::size_t apex = 0;
+  for (std::size_t b = 0; b < bins.size(); ++b)
+    if (bins[b].top > bins[apex].top) apex = b;
   double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
-  for (const ProfilePoint& p : points) {
-    if (p.top < lo || p.top > hi) continue;
+  f.foot = bins.empty() ? 0.0 : bins[apex].distance;
+  for (std::size_t b = apex; b < bins.size(); ++b) {
+    const ProfilePoint& p = bins[b];
+    if (p.top < lo) break;  // the foot of the pile, or a gap (empty bins have top < 0)
+    f.foot = p.distance;
+    if (p.top > hi) continue;
     n += 1, sx += p.distance, sy += p.top, sxx += p.distance * p.distance, sxy += p.distance * p.top;
   }
-  used += static_cast<int>(n);
+  f.points = static_cast<int>(n);
   const double den = n * sxx - sx * sx;
-  if (n < 3 || !(den > 0.0)) return false;
-  const double slope = (n * sxy - sx * sy) / den;
-  angle = std::atan(-slope) * 180.0 / kPi;
-  return true;
+  if (n < 3 || !(den > 0.0)) return f;
+  f.angle = std::atan(-(n * sxy - sx * sy) / den) * 180.0 / kPi;
+  f.ok = true;
+  return f;
+}
+
+std::int64_t grains_beyond(const std::vector<ProfilePoint>& samples, double foot, double width) {
+  std::int64_t k = 0;
+  for (const ProfilePoint& s : samples) k += s.distance > foot + width;
+  return k;
 }
 
 }  // namespace
+
+std::vector<ProfilePoint> surface_profile(const Grains& grains, const std::vector<double>& distance) {
+  if (grains.empty()) return {};
+  const double width = 2.0 * max_radius(grains);
+  const double lo = *std::min_element(distance.begin(), distance.end());
+  std::vector<ProfilePoint> shifted(grains.size());
+  for (std::size_t i = 0; i < grains.size(); ++i) shifted[i] = {distance[i] - lo, grains[i].x.z() + grains[i].r};
+  std::vector<ProfilePoint> out;
+  for (ProfilePoint p : binned_profile(shifted, width))
+    if (p.top >= 0.0) out.push_back({p.distance + lo, p.top});
+  return out;
+}
 
 HeapMeasures heap_measures(const Grains& grains, int dimension, double source_x, double source_y) {
   HeapMeasures h;
@@ -521,27 +549,206 @@ HeapMeasures heap_measures(const Grains& grains, int dimension, double source_x,
   }
   const double width = 2.0 * max_radius(grains);
   for (const Grain& g : grains) h.height = std::max(h.height, g.x.z() + g.r);
-  const double lo = 0.2 * h.height, hi = 0.8 * h.height;
+  const double lo = HeapMeasures::kLowFraction * h.height, hi = HeapMeasures::kHighFraction * h.height;
+  std::vector<double> coord(grains.size());
+  for (std::size_t i = 0; i < grains.size(); ++i)
+    coord[i] = dimension == 3 ? std::hypot(grains[i].x.x() - source_x, grains[i].x.y() - source_y)
+                              : grains[i].x.x() - source_x;
+  h.profile = surface_profile(grains, coord);
   if (dimension == 3) {
-    std::vector<ProfilePoint> samples;
-    samples.reserve(grains.size());
-    for (const Grain& g : grains)
-      samples.push_back({std::hypot(g.x.x() - source_x, g.x.y() - source_y), g.x.z() + g.r});
-    h.valid = fit_angle(profile(samples, width), lo, hi, h.angle_deg, h.profile_points);
-    if (!h.valid) h.note = "fewer than 3 radial profile points between 20% and 80% of the height";
+    std::vector<ProfilePoint> samples(grains.size());
+    for (std::size_t i = 0; i < grains.size(); ++i) samples[i] = {coord[i], grains[i].x.z() + grains[i].r};
+    const Flank f = fit_flank(binned_profile(samples, width), lo, hi);
+    h.profile_points = f.points;
+    h.grains_beyond_flank = grains_beyond(samples, f.foot, width);
+    h.valid = f.ok;
+    h.angle_deg = f.angle;
+    if (!h.valid) h.note = "fewer than 3 profile points on the flank between 20% and 80% of the height";
     return h;
   }
   std::vector<ProfilePoint> left, right;
-  for (const Grain& g : grains) {
-    const double dx = g.x.x() - source_x;
-    (dx < 0 ? left : right).push_back({std::abs(dx), g.x.z() + g.r});
-  }
-  const bool ok_left = fit_angle(profile(left, width), lo, hi, h.angle_left_deg, h.profile_points);
-  const bool ok_right = fit_angle(profile(right, width), lo, hi, h.angle_right_deg, h.profile_points);
-  h.valid = ok_left && ok_right;
+  for (std::size_t i = 0; i < grains.size(); ++i)
+    (coord[i] < 0 ? left : right).push_back({std::abs(coord[i]), grains[i].x.z() + grains[i].r});
+  const Flank fl = fit_flank(binned_profile(left, width), lo, hi);
+  const Flank fr = fit_flank(binned_profile(right, width), lo, hi);
+  h.profile_points = fl.points + fr.points;
+  h.grains_beyond_flank = grains_beyond(left, fl.foot, width) + grains_beyond(right, fr.foot, width);
+  h.angle_left_deg = fl.angle, h.angle_right_deg = fr.angle;
+  h.valid = fl.ok && fr.ok;
   if (h.valid) h.angle_deg = 0.5 * (h.angle_left_deg + h.angle_right_deg);
-  else h.note = "fewer than 3 profile points between 20% and 80% of the height on one side";
+  else h.note = "fewer than 3 profile points on a flank between 20% and 80% of the height";
   return h;
+}
+
+RadialDistribution radial_distribution(const Grains& grains, int dimension, const Container& container,
+                                       const BulkMeasures& bulk, const MetricsOptions& options) {
+  RadialDistribution out;
+  if (grains.empty()) return out;
+  double d = 0.0;
+  for (const Grain& g : grains) d += 2.0 * g.r;
+  d /= double(grains.size());
+  const int nbins = std::max(1, static_cast<int>(std::lround(options.rdf_max_d / options.rdf_bin_d)));
+  const double bin = options.rdf_bin_d * d, reach = nbins * bin;
+  out.r_over_d.resize(nbins);
+  for (int k = 0; k < nbins; ++k) out.r_over_d[k] = (k + 0.5) * options.rdf_bin_d;
+  if (!bulk.valid || bulk.grains_in_window == 0 || !(bulk.window_volume > 0.0)) return out;
+  std::vector<double> counts(nbins, 0.0);
+  Cells cells(grains, dimension, container, std::max(reach, 2.0 * max_radius(grains)) * 1.0001);
+  std::int64_t centres = 0;
+  for (std::size_t i = 0; i < grains.size(); ++i) {
+    const Vec3& x = grains[i].x;
+    const bool inside = bulk.slab ? (x.z() >= bulk.window.lo.z() && x.z() <= bulk.window.hi.z())
+                                  : in_window(x, dimension, bulk.window);
+    if (!inside) continue;
+    ++centres;
+    cells.for_neighbours(x, [&](std::uint32_t j) {
+      if (j == i) return;
+      const double r = cells.separation(grains[j].x, x).norm();
+      const int k = static_cast<int>(r / bin);
+      if (k < nbins) counts[k] += 1.0;
+    });
+  }
+  const double density = double(centres) / bulk.window_volume;
+  out.g.resize(nbins);
+  for (int k = 0; k < nbins; ++k) {
+    const double a = k * bin, b = (k + 1) * bin;
+    const double shell = dimension == 3 ? 4.0 / 3.0 * kPi * (b * b * b - a * a * a) : kPi * (b * b - a * a);
+    out.g[k] = counts[k] / (double(centres) * density * shell);
+  }
+  out.valid = true;
+  return out;
+}
+
+namespace {
+
+SegregationIndex segregation_of(const Grains& grains, const std::vector<double>& c) {
+  SegregationIndex s;
+  std::map<int, std::pair<double, std::int64_t>> by_species;  // sum of radii, count
+  for (const Grain& g : grains) {
+    auto& e = by_species[g.species];
+    e.first += g.r, e.second += 1;
+  }
+  std::vector<char> large(grains.size(), 0), small(grains.size(), 0);
+  if (by_species.size() >= 2) {
+    int ks = by_species.begin()->first, kl = ks;
+    for (const auto& [k, e] : by_species) {
+      const double m = e.first / e.second;
+      if (m < by_species[ks].first / by_species[ks].second) ks = k;
+      if (m > by_species[kl].first / by_species[kl].second) kl = k;
+    }
+    if (by_species[ks].first / by_species[ks].second == by_species[kl].first / by_species[kl].second) {
+      s.basis = "all species have the same mean radius";
+      return s;
+    }
+    for (std::size_t i = 0; i < grains.size(); ++i)
+      large[i] = grains[i].species == kl, small[i] = grains[i].species == ks;
+    s.basis = "species " + std::to_string(kl) + " (large) vs " + std::to_string(ks) + " (small)";
+  } else {
+    if (grains.empty()) {
+      s.basis = "no grains";
+      return s;
+    }
+    std::vector<double> r(grains.size());
+    for (std::size_t i = 0; i < grains.size(); ++i) r[i] = grains[i].r;
+    const auto [mn, mx] = std::minmax_element(r.begin(), r.end());
+    if (*mx <= *mn * 1.05) {
+      s.basis = "one size (radii within 5 %)";
+      return s;
+    }
+    std::vector<double> sorted = r;
+    const std::size_t n = sorted.size();
+    std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.end());
+    double median = sorted[n / 2];
+    if (n % 2 == 0) median = 0.5 * (median + *std::max_element(sorted.begin(), sorted.begin() + n / 2));
+    for (std::size_t i = 0; i < n; ++i) large[i] = r[i] > median, small[i] = r[i] <= median;
+    s.basis = "radius above vs below the median";
+  }
+  double sl = 0, ss = 0;
+  std::int64_t nl = 0, ns = 0;
+  for (std::size_t i = 0; i < grains.size(); ++i) {
+    if (large[i]) sl += c[i], ++nl;
+    if (small[i]) ss += c[i], ++ns;
+  }
+  if (nl == 0 || ns == 0) {
+    s.basis += ": one of the two groups is empty";
+    return s;
+  }
+  s.mean_large = sl / nl, s.mean_small = ss / ns;
+  s.index = 2.0 * (s.mean_large - s.mean_small) / (s.mean_large + s.mean_small);
+  s.valid = true;
+  return s;
+}
+
+}  // namespace
+
+SegregationIndex vertical_segregation(const Grains& grains) {
+  std::vector<double> c(grains.size());
+  for (std::size_t i = 0; i < grains.size(); ++i) c[i] = grains[i].x.z();
+  return segregation_of(grains, c);
+}
+
+SegregationIndex radial_segregation(const Grains& grains, const Vec3& point, const Vec3& direction) {
+  const Vec3 u = direction.normalized();
+  std::vector<double> c(grains.size());
+  for (std::size_t i = 0; i < grains.size(); ++i) {
+    const Vec3 v = grains[i].x - point;
+    c[i] = (v - v.dot(u) * u).norm();
+  }
+  return segregation_of(grains, c);
+}
+
+std::vector<double> surface_depth(const Grains& grains, int dimension) {
+  std::vector<double> depth(grains.size(), 0.0);
+  if (grains.empty()) return depth;
+  double x0 = std::numeric_limits<double>::max(), x1 = -x0, y0 = x0, y1 = -x0;
+  for (const Grain& g : grains) {
+    x0 = std::min(x0, g.x.x()), x1 = std::max(x1, g.x.x());
+    y0 = std::min(y0, g.x.y()), y1 = std::max(y1, g.x.y());
+  }
+  const double d = 2.0 * max_radius(grains);
+  const HeightMap h = height_map(grains, dimension, x0, x1 + 1e-9 * d, y0, y1 + 1e-9 * d, d, 1 << 20);
+  const double wx = (h.ex.back() - h.ex.front()) / h.nx;
+  const double wy = dimension == 3 ? (h.ey.back() - h.ey.front()) / h.ny : 1.0;
+  for (std::size_t k = 0; k < grains.size(); ++k) {
+    const Grain& g = grains[k];
+    const int i = std::clamp(static_cast<int>((g.x.x() - x0) / wx), 0, h.nx - 1);
+    const int j = dimension == 3 ? std::clamp(static_cast<int>((g.x.y() - y0) / wy), 0, h.ny - 1) : 0;
+    depth[k] = h.top[std::size_t(j) * h.nx + i] - g.x.z();
+  }
+  return depth;
+}
+
+PackingMeasures measure_packing(const Grains& grains, int dimension, const Container& container,
+                                const MetricsOptions& options, bool heap_source, double source_x,
+                                double source_y) {
+  PackingMeasures m;
+  m.options = options;
+  m.n_grains = static_cast<std::int64_t>(grains.size());
+  m.heap_source = heap_source, m.source_x = source_x, m.source_y = source_y;
+  if (grains.empty()) {
+    m.bulk.note = "no grains";
+    return m;
+  }
+  double sum_d = 0.0, sum_z = 0.0;
+  for (const Grain& g : grains) {
+    sum_d += 2.0 * g.r, sum_z += g.x.z();
+    m.max_top = std::max(m.max_top, g.x.z() + g.r);
+  }
+  m.mean_diameter = sum_d / double(grains.size());
+  m.largest_diameter = 2.0 * max_radius(grains);
+  m.mean_centre_height = sum_z / double(grains.size());
+  m.coordination = coordination_numbers(grains, dimension, container, options.contact_tol);
+  double total = 0.0;
+  for (int z : m.coordination) total += z;
+  m.mean_coordination_all = total / double(grains.size());
+  m.bulk = bulk_measures(grains, dimension, container, options, &m.coordination);
+  m.rdf = radial_distribution(grains, dimension, container, m.bulk, options);
+  if (heap_source) m.heap = heap_measures(grains, dimension, source_x, source_y);
+  std::vector<double> x(grains.size());
+  for (std::size_t i = 0; i < grains.size(); ++i) x[i] = grains[i].x.x();
+  m.profile_x = surface_profile(grains, x);
+  m.segregation = vertical_segregation(grains);
+  return m;
 }
 
 }  // namespace btr

@@ -71,7 +71,8 @@ TEST(DepositCli, WritesThePackingWithItsMetadata) {
   EXPECT_FALSE(m["version"].get<std::string>().empty());
   for (const char* stage : {"deposition", "check", "writing"}) EXPECT_GT(m["timings"][stage].get<double>(), 0.0) << stage;
   EXPECT_EQ(m["check"]["ok"], true);
-  EXPECT_TRUE(m["metrics"]["heap"]["valid"].get<bool>());
+  EXPECT_TRUE(m["measures"]["heap"]["valid"].get<bool>());
+  EXPECT_EQ(m["measures"]["bulk"]["contact_tolerance"], 1e-7);  // the definition travels with the numbers
   // the stored scene rebuilds this run: it carries the seed and count actually used
   const Scene s = scene_from_json(m["scene"], "meta");
   EXPECT_EQ(s.seed, 7u);
