@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "btr/metrics.h"
+#include "btr/scene_toml.h"
 #include "commands.h"
 #include "load_packing.h"
 #include "measures_json.h"
@@ -47,7 +48,7 @@ std::string per_grain_csv(const btr::Grains& grains, int dimension, const btr::P
 
 Runner add_measure_command(CLI::App& app) {
   struct Options {
-    std::string packing, out, per_grain;
+    std::string packing, out, per_grain, scene;
     btr::MetricsOptions metrics;
   };
   auto o = std::make_shared<Options>();
@@ -60,6 +61,8 @@ Runner add_measure_command(CLI::App& app) {
       ->required()
       ->check(CLI::ExistingFile);
   cmd->add_option("-o,--out", o->out, "write the JSON here (default: stdout)");
+  cmd->add_option("--scene", o->scene, "scene TOML to take the container and source from (default: PACKING.json's)")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--margin", o->metrics.margin_diameters,
                   "bulk window margin from floor, walls and free surface, in largest diameters")
       ->capture_default_str()
@@ -77,7 +80,12 @@ Runner add_measure_command(CLI::App& app) {
   return [o]() -> int {
     PackingWithScene p;
     try {
-      p = load_packing_with_scene(o->packing);
+      if (o->scene.empty()) {
+        p = load_packing_with_scene(o->packing);
+      } else {
+        p.packing = btr::read_packing(o->packing);
+        p.scene = btr::load_scene(o->scene);
+      }
     } catch (const std::exception& e) {
       std::cerr << "btr measure: " << e.what() << "\n";
       return kBadInput;

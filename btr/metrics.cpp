@@ -235,7 +235,7 @@ class Cells {
 // ---------------------------------------------------------------- free surface
 
 // The free surface seen from above: the lateral rectangle cut into columns about one largest diameter
-// wide, each with the highest grain top among the grains centred in it (0 if none).
+// wide (at least one), each with the highest grain top among the grains centred in it (0 if none).
 struct HeightMap {
   int nx = 1, ny = 1;
   std::vector<double> ex, ey;  // column edges (2D: ey = {0, 1})
@@ -246,7 +246,8 @@ HeightMap height_map(const Grains& grains, int dimension, double x0, double x1, 
                      int max_columns) {
   HeightMap h;
   auto edges = [&](double a, double b, int& n, std::vector<double>& e) {
-    n = std::clamp(static_cast<int>(std::ceil((b - a) / width - 1e-9)), 1, max_columns);
+    // at least `width` wide: a narrower column can hold no grain centre and read as a hole in the surface
+    n = std::clamp(static_cast<int>(std::floor((b - a) / width + 1e-9)), 1, max_columns);
     e.resize(n + 1);
     for (int k = 0; k <= n; ++k) e[k] = a + (b - a) * k / n;
   };

@@ -17,7 +17,6 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from btrdem import metrics  # noqa: E402
 from btrdem.io import InputError  # noqa: E402
 from btrdem.runner import REPO, StepFailed  # noqa: E402
 
@@ -26,16 +25,6 @@ DEFAULT_SCENE = REPO / "inputs" / "bed3d.toml"
 
 def progress(msg: str):
     print(msg, flush=True)
-
-
-def window_arg(text: str) -> metrics.Window:
-    try:
-        parts = [float(x) for x in text.split(",")]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected FLOOR,WALL,SURFACE in mean diameters, got {text!r}") from None
-    if len(parts) != 3 or min(parts) < 0:
-        raise argparse.ArgumentTypeError(f"expected three non-negative numbers FLOOR,WALL,SURFACE, got {text!r}")
-    return metrics.Window(*parts)
 
 
 def floats(text: str) -> list:
@@ -60,15 +49,16 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="btr_workflow.py", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="command", required=True)
-    win_help = "bulk window margins in mean diameters FLOOR,WALL,SURFACE (default 2,2,2)"
+    margin_help = "bulk window margin from floor, walls and free surface, in largest diameters (default: btr measure's)"
 
     c = sub.add_parser("compare", help="compare two packings of the same grains")
     c.add_argument("pre")
     c.add_argument("post")
     c.add_argument("-o", "--out", required=True)
     c.add_argument("--scene", help="scene TOML (default: the scene in PRE's JSON)")
-    c.add_argument("--window", type=window_arg, default=metrics.Window(), help=win_help)
-    c.add_argument("--contact-tolerance", type=float, default=metrics.CONTACT_TOLERANCE)
+    c.add_argument("--margin", type=float, help=margin_help)
+    c.add_argument("--contact-tolerance", type=float,
+                   help="contact: gap < tolerance x smaller radius (default: btr measure's)")
 
     p = sub.add_parser("pour", help="reference LIGGGHTS pour of a BTR packing's grains")
     p.add_argument("packing")
@@ -95,7 +85,7 @@ def main(argv=None) -> int:
     e.add_argument("--relax-times", type=floats, help="relaxation caps [s], e.g. 0.01,0.05,0.2")
     e.add_argument("--pours", type=pour_variants, help="shorter pours PACE:STOP,... e.g. 0.25:1e-3,0.5:1e-4,1:1e-6")
     e.add_argument("--np", type=int, default=1)
-    e.add_argument("--window", type=window_arg, default=metrics.Window(), help=win_help)
+    e.add_argument("--margin", type=float, help=margin_help)
 
     s = sub.add_parser("stability", help="relaxation stability sweep")
     s.add_argument("-o", "--out", help="output folder (default out/stability)")
@@ -112,9 +102,9 @@ def main(argv=None) -> int:
             from btrdem.runner import RunRecord
             rec = RunRecord(args.out, "compare", inputs=[args.scene] if args.scene else [], progress=progress,
                             settings={"pre": str(Path(args.pre).resolve()), "post": str(Path(args.post).resolve()),
-                                      "window": args.window.as_dict(), "contact_tolerance": args.contact_tolerance})
+                                      "margin": args.margin, "contact_tolerance": args.contact_tolerance})
             with rec.step("compare"):
-                res = compare(args.pre, args.post, args.out, args.scene, args.window, args.contact_tolerance,
+                res = compare(args.pre, args.post, args.out, args.scene, args.margin, args.contact_tolerance,
                               progress)
             rec.finish()
             st = res["displacement_d"]
@@ -138,7 +128,7 @@ def main(argv=None) -> int:
         elif args.command == "error-vs-runtime":
             from btrdem.error_runtime import run_error_vs_runtime
             run_error_vs_runtime(args.scene, args.out, args.engine, args.ref_seeds, args.count, args.relax_times,
-                                 args.pours, args.np, args.window, progress)
+                                 args.pours, args.np, args.margin, progress)
         elif args.command == "stability":
             from btrdem.stability import run_stability
             engines = [x for x in args.engines.split(",") if x]

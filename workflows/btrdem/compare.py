@@ -12,7 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import metrics, report
+from . import measures, report
+from .displacement import displacement, displacement_stats, local_displacement, mean_diameter
 from .geometry import Container
 from .io import InputError, Packing, atomic_write_text, read_packing, read_scene_toml, write_json, write_vtp
 from .support import KIND_LABEL, KIND_ORDER, btr_supports
@@ -136,50 +137,53 @@ def read_kinetic(path: str):
 
 
 def compare(pre_path: str, post_path: str, outdir: str, scene_path: str | None = None,
-            window: metrics.Window = metrics.Window(), tol: float = metrics.CONTACT_TOLERANCE,
+            margin: float | None = None, tol: float | None = None,
             progress=print, local_reach_d: float = LOCAL_REACH_D) -> dict:
+    """margin, tol: bulk-window margin (largest diameters) and contact tolerance of `btr measure`;
+    None keeps its defaults."""
     out = Path(outdir)
     (out / "figures").mkdir(parents=True, exist_ok=True)
     pre = read_packing(pre_path)
     post = read_packing(post_path)
     align(pre, post)
     container, scene = load_context(pre, scene_path)
-    heap = metrics.heap_axis_of(scene)
-    d = metrics.mean_diameter(pre.radius)
+    d = mean_diameter(pre.radius)
 
     progress(f"compare: {len(pre)} grains, {container.dimension}D {container.kind} container, d = {d:.4g} m")
-    disp_vec = metrics.displacement(pre.pos, post.pos, container)
+    disp_vec = displacement(pre.pos, post.pos, container)
     disp_d = np.linalg.norm(disp_vec, axis=1) / d
-    stats = metrics.displacement_stats(disp_d, THRESHOLDS)
-    local_d = metrics.local_displacement(pre.pos, disp_vec, container, local_reach_d * d) / d
-    stats_local = metrics.displacement_stats(local_d, THRESHOLDS)
+    stats = displacement_stats(disp_d, THRESHOLDS)
+    local_d = local_displacement(pre.pos, disp_vec, container, local_reach_d * d) / d
+    stats_local = displacement_stats(local_d, THRESHOLDS)
 
-    progress("compare: structure of PRE")
-    s_pre = metrics.structure(pre.pos, pre.radius, pre.species, container, d, window, heap, tol)
-    progress("compare: structure of POST")
-    s_post = metrics.structure(post.pos, post.radius, post.species, container, d, window, heap, tol)
+    progress("compare: structure of PRE and POST (btr measure)")
+    s_pre = measures.measure(pre_path, margin, tol, scene_path, per_grain=True, out_json=out / "pre.measures.json")
+    s_post = measures.measure(post_path, margin, tol, scene_path, out_json=out / "post.measures.json")
+    per_grain = s_pre.pop("per_grain")
+    if not np.array_equal(per_grain["id"], pre.ids):
+        raise InputError(f"{pre_path}: btr measure's per-grain ids differ from the packing's")
 
     progress("compare: BTR supports of the grains DEM moved")
     sup = btr_supports(pre.pos, pre.radius, container)
-    bulk_pre = metrics.Bulk(pre.pos, pre.radius, container, window, d)
     height_d = pre.pos[:, 2] / d
     wall_d = container.wall_distance(pre.pos) / d
-    surface_d = bulk_pre.surface_distance() / d
+    surface_d = per_grain["surface_depth"] / d
     nonphys = {"absolute": nonphysical(sup, disp_d, height_d, wall_d, surface_d, container.dimension),
                "local": nonphysical(sup, local_d, height_d, wall_d, surface_d, container.dimension)}
 
-    def delta(a, b):
+    def delta(f):
+        a, b = f(s_pre), f(s_post)
         return None if a is None or b is None else b - a
 
-    aor = [s["angle_of_repose"]["angle_deg"] if s["angle_of_repose"] else None for s in (s_pre, s_post)]
-    seg = [s["segregation"]["index"] if s["segregation"] else None for s in (s_pre, s_post)]
     changes = {
-        "packing_fraction": delta(s_pre["packing_fraction"], s_post["packing_fraction"]),
-        "coordination_mean": delta(s_pre["coordination"]["mean"], s_post["coordination"]["mean"]),
-        "rdf_rms_difference": metrics.rdf_distance(s_pre["rdf"]["g"], s_post["rdf"]["g"], s_pre["rdf"]["r_over_d"]),
-        "angle_of_repose_deg": delta(*aor),
-        "segregation_index": delta(*seg),
+        "packing_fraction": delta(measures.packing_fraction),
+        "coordination_mean": delta(measures.coordination),
+        "rdf_rms_difference": measures.rdf_distance(measures.rdf(s_pre)[1], measures.rdf(s_post)[1],
+                                                    measures.rdf(s_pre)[0]),
+        "angle_of_repose_deg": delta(measures.angle_of_repose),
+        "segregation_index": delta(measures.segregation),
     }
+    heap = s_pre["heap"]["axis"] if s_pre.get("heap") else None
 
     progress("compare: figures and VTK files")
     figs = _figures(out / "figures", disp_d, local_d, height_d, s_pre, s_post, post_path)
@@ -209,10 +213,10 @@ def _figures(figdir: Path, disp_d, local_d, height_d, s_pre, s_post, post_path) 
                                                                     local=local_d),
             "displacement_vs_height": report.displacement_vs_height(height_d, disp_d, figdir / "displacement_vs_height.png",
                                                                     disp_d > THRESHOLDS[0], local=local_d)}
-    figs["rdf"] = report.curves(figdir / "rdf.png", [("BTR (pre)", s_pre["rdf"]["r_over_d"], s_pre["rdf"]["g"]),
-                                                     ("relaxed (post)", s_post["rdf"]["r_over_d"], s_post["rdf"]["g"])],
+    figs["rdf"] = report.curves(figdir / "rdf.png", [("BTR (pre)", *measures.rdf(s_pre)),
+                                                     ("relaxed (post)", *measures.rdf(s_post))],
                                 "r / mean diameter", "g(r)", "Radial distribution function (bulk window)")
-    sp, sq = s_pre["surface_profile"], s_post["surface_profile"]
+    sp, sq = measures.surface_profile(s_pre), measures.surface_profile(s_post)
     xl = "distance from the heap axis [m]" if sp["mode"] == "radial" else "x [m]"
     figs["surface_profile"] = report.curves(figdir / "surface_profile.png",
                                             [("BTR (pre)", sp["coord"], sp["height"]),
@@ -242,18 +246,19 @@ def _write_per_grain(path, pre, disp_d, local_d, sup, height_d, wall_d, surface_
 def markdown(res: dict) -> str:
     sp, sq = res["structure"]["pre"], res["structure"]["post"]
     st, ch = res["displacement_d"], res["changes"]
-    aor = [s["angle_of_repose"]["angle_deg"] if s["angle_of_repose"] else None for s in (sp, sq)]
-    seg = [s["segregation"]["index"] if s["segregation"] else None for s in (sp, sq)]
+    aor = [measures.angle_of_repose(s) for s in (sp, sq)]
+    seg = [measures.segregation(s) for s in (sp, sq)]
     lines = [f"# Comparison: {os.path.basename(res['pre'])} -> {os.path.basename(res['post'])}", "",
              f"{sp['n_grains']} grains, {res['dimension']}D, container {res['container']['kind']}, mean diameter "
-             f"d = {report.fmt(res['mean_diameter'])} m. Bulk window: {sp['window']['floor']:g} d above the floor, "
-             f"{sp['window']['wall']:g} d from walls, {sp['window']['surface']:g} d below the free surface; "
-             f"contacts: centre distance < (r_i + r_j)(1 + {sp['window']['contact_tolerance']:g}).", "",
+             f"d = {report.fmt(res['mean_diameter'])} m. Measures by `btr measure` (the numbers btr.json and "
+             f"relaxed.json hold): {measures.definitions(sp)}.", "",
              "## Structure", ""]
-    rows = [["bulk grains", sp["window"]["n_bulk_grains"], sq["window"]["n_bulk_grains"], None],
-            ["packing fraction (bulk)", sp["packing_fraction"], sq["packing_fraction"], ch["packing_fraction"]],
-            ["mean coordination (bulk)", sp["coordination"]["mean"], sq["coordination"]["mean"], ch["coordination_mean"]],
-            ["mean coordination (all grains)", sp["coordination"]["mean_all_grains"], sq["coordination"]["mean_all_grains"],
+    margin_d, tol = sp["bulk"]["window_margin_diameters"], sp["bulk"]["contact_tolerance"]
+    rows = [["bulk grains", sp["bulk"].get("grains_in_window"), sq["bulk"].get("grains_in_window"), None],
+            [f"packing fraction (bulk, margin {margin_d:g} d_max)", measures.packing_fraction(sp), measures.packing_fraction(sq),
+             ch["packing_fraction"]],
+            [f"mean coordination (bulk, contact tolerance {tol:g})", measures.coordination(sp), measures.coordination(sq), ch["coordination_mean"]],
+            [f"mean coordination (all grains, contact tolerance {tol:g})", sp["mean_coordination_all_grains"], sq["mean_coordination_all_grains"],
              None],
             ["g(r) RMS difference (r > 0.5 d)", None, None, ch["rdf_rms_difference"]],
             ["angle of repose [deg]", aor[0], aor[1], ch["angle_of_repose_deg"]],
@@ -266,8 +271,8 @@ def markdown(res: dict) -> str:
               report.md_table(["mean", "median", "95th percentile", "max", "fraction > 0.1 d", "fraction > 0.5 d"],
                               [[st["mean"], st["median"], st["p95"], st["max"], st["fraction_above_0.1"],
                                 st["fraction_above_0.5"]]])]
-    dp = sp["coordination"]["distribution"] or {}
-    dq = sq["coordination"]["distribution"] or {}
+    dp = measures.coordination_distribution(sp) or {}
+    dq = measures.coordination_distribution(sq) or {}
     ks = sorted(set(dp) | set(dq), key=int)
     if ks:
         lines += ["## Contact-number distribution (bulk, fraction of grains)", "",

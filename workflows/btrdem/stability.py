@@ -22,7 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import btr_cli, dem_params, metrics, report
+from . import btr_cli, dem_params, report
+from .neighbours import touching_pairs
 from .io import atomic_write_text, read_packing, read_scene_toml, write_json, write_scene_toml
 from .runner import REPO, RunRecord, StepFailed, find_btr
 
@@ -96,7 +97,7 @@ def check_result(relaxed_csv: str, n_expected: int, kinetic_threshold: float) ->
     outside = (p.pos[:, 2] < -0.5 * p.radius) | (c.wall_distance(p.pos) < -0.5 * p.radius)
     if np.any(outside):
         return "fail", f"grains lost: grain {int(p.ids[np.argmax(outside)])} left the container", info
-    pairs, dist = metrics.contact_pairs(p.pos, p.radius, c, tol=0.0)
+    pairs, dist = touching_pairs(p.pos, p.radius, c, tol=0.0)
     worst = 0.0
     if len(pairs):
         ri, rj = p.radius[pairs[:, 0]], p.radius[pairs[:, 1]]
