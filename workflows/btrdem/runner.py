@@ -215,7 +215,9 @@ class RunRecord:
             raise
         except Exception as e:  # noqa: BLE001 - a failed case is a row with its reason, not a failed study
             message = str(e).strip() or type(e).__name__
-            row.update(status="fail", reason=message.splitlines()[0][:300])
+            lines = [x.strip() for x in message.splitlines() if x.strip()]
+            reason = " ".join(lines[:2]) if lines[0].endswith(":") else lines[0]  # "X failed:\n<why>"
+            row.update(status="fail", reason=reason[:300])
             entry.update(status="failed", wall_seconds=time.monotonic() - t0, error=message[-3000:])
             self.progress(f"   {name}: FAILED ({row['reason']}); the study goes on")
         else:
