@@ -99,9 +99,7 @@ int run(const Options& o, const CLI::App& cmd) {
 
   // ---- summary measures
   auto t_metrics = std::chrono::steady_clock::now();
-  const bool point = scene.source.kind == btr::SourceSpec::Kind::Point;
-  const btr::PackingMeasures measures = btr::measure_packing(grains, scene.dimension, scene.container, {}, point,
-                                                             scene.source.x, scene.source.y);
+  const btr::PackingMeasures measures = measure_in_scene(grains, scene);
   const double metrics_seconds = seconds_since(t_metrics);
 
   // ---- metadata and files

@@ -32,12 +32,7 @@ std::string per_grain_csv(const btr::Grains& grains, int dimension, const btr::P
   std::string out = "id,coordination,in_window,surface_depth\n";
   char row[120];
   for (std::size_t i = 0; i < grains.size(); ++i) {
-    const btr::Vec3& x = grains[i].x;
-    bool inside = b.valid && x.z() >= b.window.lo.z() && x.z() <= b.window.hi.z();
-    if (inside && !b.slab) {
-      inside = x.x() >= b.window.lo.x() && x.x() <= b.window.hi.x();
-      if (dimension == 3) inside = inside && x.y() >= b.window.lo.y() && x.y() <= b.window.hi.y();
-    }
+    const bool inside = b.valid && btr::in_bulk_window(b, grains[i].x, dimension);
     std::snprintf(row, sizeof row, "%zu,%d,%d,%.17g\n", i + 1, m.coordination[i], inside ? 1 : 0, depth[i]);
     out += row;
   }
@@ -92,9 +87,7 @@ Runner add_measure_command(CLI::App& app) {
     }
     try {
       const btr::Scene& sc = p.scene;
-      const bool point = sc.source.kind == btr::SourceSpec::Kind::Point;
-      const btr::PackingMeasures m = btr::measure_packing(p.packing.grains, sc.dimension, sc.container, o->metrics,
-                                                          point, sc.source.x, sc.source.y);
+      const btr::PackingMeasures m = measure_in_scene(p.packing.grains, sc, o->metrics);
       const std::string text = measures_to_json(m, sc.dimension).dump(1) + "\n";
       if (o->out.empty()) std::cout << text;
       else write_text_atomically(o->out, text);

@@ -22,6 +22,13 @@ json segregation_json(const btr::SegregationIndex& s) {
 
 }  // namespace
 
+btr::PackingMeasures measure_in_scene(const btr::Grains& grains, const btr::Scene& scene,
+                                      const btr::MetricsOptions& options) {
+  const bool point = scene.source.kind == btr::SourceSpec::Kind::Point;
+  return btr::measure_packing(grains, scene.dimension, scene.container, options, point, scene.source.x,
+                              scene.source.y);
+}
+
 json measures_to_json(const btr::PackingMeasures& m, int dimension) {
   const btr::MetricsOptions& o = m.options;
   const btr::BulkMeasures& b = m.bulk;

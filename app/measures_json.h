@@ -5,8 +5,13 @@
 #include <nlohmann/json.hpp>
 
 #include "btr/metrics.h"
+#include "btr/scene.h"
 
 namespace btr_app {
+
+// The measures of grains in a scene's container; heaps (point sources) are measured about the source.
+btr::PackingMeasures measure_in_scene(const btr::Grains& grains, const btr::Scene& scene,
+                                      const btr::MetricsOptions& options = {});
 
 nlohmann::json measures_to_json(const btr::PackingMeasures& m, int dimension);
 

@@ -314,6 +314,10 @@ std::string fmt(const char* format, double a, double b = 0.0) {
 
 // ---------------------------------------------------------------- public
 
+bool in_bulk_window(const BulkMeasures& bulk, const Vec3& x, int dimension) {
+  return bulk.slab ? (x.z() >= bulk.window.lo.z() && x.z() <= bulk.window.hi.z()) : in_window(x, dimension, bulk.window);
+}
+
 std::vector<int> coordination_numbers(const Grains& grains, int dimension, const Container& container,
                                       double contact_tol) {
   std::vector<int> z(grains.size(), 0);
@@ -458,10 +462,7 @@ BulkMeasures bulk_measures(const Grains& grains, int dimension, const Container&
   const std::vector<int>& z = computed.empty() ? *coordination : computed;
   std::int64_t total = 0;
   for (std::size_t i = 0; i < grains.size(); ++i) {
-    const Vec3& x = grains[i].x;
-    bool inside = m.slab ? (x.z() >= m.window.lo.z() && x.z() <= m.window.hi.z())
-                         : in_window(x, dimension, m.window);
-    if (!inside) continue;
+    if (!in_bulk_window(m, grains[i].x, dimension)) continue;
     ++m.grains_in_window;
     total += z[i];
     if (static_cast<std::size_t>(z[i]) >= m.coordination_histogram.size())
@@ -598,9 +599,7 @@ RadialDistribution radial_distribution(const Grains& grains, int dimension, cons
   std::int64_t centres = 0;
   for (std::size_t i = 0; i < grains.size(); ++i) {
     const Vec3& x = grains[i].x;
-    const bool inside = bulk.slab ? (x.z() >= bulk.window.lo.z() && x.z() <= bulk.window.hi.z())
-                                  : in_window(x, dimension, bulk.window);
-    if (!inside) continue;
+    if (!in_bulk_window(bulk, x, dimension)) continue;
     ++centres;
     cells.for_neighbours(x, [&](std::uint32_t j) {
       if (j == i) return;

@@ -74,6 +74,9 @@ struct SegregationIndex {
 std::vector<int> coordination_numbers(const Grains& grains, int dimension, const Container& container,
                                       double contact_tol = 1e-7);
 
+// Whether a centre lies in the bulk window (slab: only its height counts).
+bool in_bulk_window(const BulkMeasures& bulk, const Vec3& x, int dimension);
+
 // Volume (3D) or area (2D) of one grain inside a box; exact, except spheres cut by a vertical box side
 // (Gauss-Legendre quadrature over exact disk-rectangle areas, relative error below 1e-9).
 double grain_volume_in_box(const Grain& g, int dimension, const Box& box);

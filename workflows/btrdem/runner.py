@@ -168,14 +168,18 @@ class RunRecord:
     def save(self):
         write_json(self.path, self.data)
 
-    @contextlib.contextmanager
-    def step(self, name: str):
-        """Times a step and records it; on failure records the error and raises StepFailed."""
+    def _start(self, name: str):
+        """A new step entry in run.json, saved at once; returns it and its start time."""
         entry = {"name": name, "status": "running", "started": datetime.datetime.now().isoformat(timespec="seconds")}
         self.data["steps"].append(entry)
         self.save()
         self.progress(f"== {name}")
-        t0 = time.monotonic()
+        return entry, time.monotonic()
+
+    @contextlib.contextmanager
+    def step(self, name: str):
+        """Times a step and records it; on failure records the error and raises StepFailed."""
+        entry, t0 = self._start(name)
         try:
             yield entry
         except BaseException as e:
@@ -202,11 +206,7 @@ class RunRecord:
         row.setdefault("status", "running")
         row.setdefault("reason", "")
         rows.append(row)
-        entry = {"name": name, "status": "running", "started": datetime.datetime.now().isoformat(timespec="seconds")}
-        self.data["steps"].append(entry)
-        self.save()
-        self.progress(f"== {name}")
-        t0 = time.monotonic()
+        entry, t0 = self._start(name)
         try:
             yield row
         except (KeyboardInterrupt, InputError):
