@@ -147,6 +147,7 @@ class Cells {
       hi = hi.cwiseMax(g.x);
     }
     if (dimension == 2) lo.y() = hi.y() = 0.0;
+    dim3_ = dimension == 3;
     // Keep the dense cell array at most a few times the number of grains.
     for (;;) {
       for (int a = 0; a < 3; ++a) {
@@ -178,16 +179,23 @@ class Cells {
     order_.resize(grains.size());
     std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
     for (std::size_t i = 0; i < grains.size(); ++i) order_[fill[cell[i]]++] = static_cast<std::uint32_t>(i);
+    sorted_.resize(grains.size());
+    for (std::size_t p = 0; p < order_.size(); ++p) sorted_[p] = grains[order_[p]].x;
   }
 
-  // Calls f(j) for every grain j in the cells around position x (each cell once).
+  // Grain indices in cell order: visiting centres in this order keeps the neighbour cells in cache.
+  const std::vector<std::uint32_t>& order() const { return order_; }
+
+  // Calls f(j, centre of j) for every grain j in the cells within `reach` cells of position x's cell (each cell once).
   template <class F>
-  void for_neighbours(const Vec3& x, F&& f) const {
+  void for_neighbours(const Vec3& x, F&& f, int reach = 1) const {
+    constexpr int kMaxReach = 4;
+    reach = std::clamp(reach, 1, kMaxReach);
     std::array<int, 3> c = coords(x);
-    std::array<std::array<int, 3>, 3> idx;
+    std::array<std::array<int, 2 * kMaxReach + 1>, 3> idx;
     std::array<int, 3> count{};
     for (int a = 0; a < 3; ++a) {
-      for (int d = -1; d <= 1; ++d) {
+      for (int d = -reach; d <= reach; ++d) {
         int k = c[a] + d;
         if (periodic_[a]) k = ((k % n_[a]) + n_[a]) % n_[a];
         else if (k < 0 || k >= n_[a]) continue;
@@ -200,15 +208,23 @@ class Cells {
       for (int j = 0; j < count[1]; ++j)
         for (int k = 0; k < count[2]; ++k) {
           std::size_t cell = index({idx[0][i], idx[1][j], idx[2][k]});
-          for (std::uint32_t p = start_[cell]; p < start_[cell + 1]; ++p) f(order_[p]);
+          for (std::uint32_t p = start_[cell]; p < start_[cell + 1]; ++p) f(order_[p], sorted_[p]);
         }
+  }
+
+  // The narrowest cell side (axes in use).
+  double width() const {
+    double w = std::min(size_[0], size_[2]);
+    return dim3_ ? std::min(w, size_[1]) : w;
   }
 
   // Shortest separation vector from b to a (minimum image across periodic sides).
   Vec3 separation(const Vec3& a, const Vec3& b) const {
     Vec3 d = a - b;
-    for (int k = 0; k < 3; ++k)
-      if (periodic_[k]) d[k] -= period_[k] * std::round(d[k] / period_[k]);
+    for (int k = 0; k < 3; ++k) {
+      if (!periodic_[k]) continue;
+      if (std::abs(d[k]) > 0.5 * period_[k]) d[k] -= period_[k] * std::round(d[k] / period_[k]);
+    }
     return d;
   }
 
@@ -226,10 +242,12 @@ class Cells {
     return (std::size_t(c[2]) * n_[1] + c[1]) * n_[0] + c[0];
   }
 
+  bool dim3_ = true;
   bool periodic_[3] = {false, false, false};
   double period_[3] = {0, 0, 0}, origin_[3] = {0, 0, 0}, size_[3] = {1, 1, 1};
   int n_[3] = {1, 1, 1};
   std::vector<std::uint32_t> start_, order_;
+  std::vector<Vec3> sorted_;  // grain centres in cell order, contiguous for the neighbour loops
 };
 
 // ---------------------------------------------------------------- free surface
@@ -326,10 +344,10 @@ std::vector<int> coordination_numbers(const Grains& grains, int dimension, const
   Cells cells(grains, dimension, container, 2.0 * r_max * (1.0 + 2.0 * contact_tol) * 1.0001);
   for (std::size_t i = 0; i < grains.size(); ++i) {
     const Grain& gi = grains[i];
-    cells.for_neighbours(gi.x, [&](std::uint32_t j) {
+    cells.for_neighbours(gi.x, [&](std::uint32_t j, const Vec3& xj) {
       if (j <= i) return;
       const Grain& gj = grains[j];
-      const double gap = cells.separation(gi.x, gj.x).norm() - gi.r - gj.r;
+      const double gap = cells.separation(gi.x, xj).norm() - gi.r - gj.r;
       if (gap < contact_tol * std::min(gi.r, gj.r)) {
         ++z[i];
         ++z[j];
@@ -595,18 +613,26 @@ RadialDistribution radial_distribution(const Grains& grains, int dimension, cons
   for (int k = 0; k < nbins; ++k) out.r_over_d[k] = (k + 0.5) * options.rdf_bin_d;
   if (!bulk.valid || bulk.grains_in_window == 0 || !(bulk.window_volume > 0.0)) return out;
   std::vector<double> counts(nbins, 0.0);
-  Cells cells(grains, dimension, container, std::max(reach, 2.0 * max_radius(grains)) * 1.0001);
+  // Cells a third of the reach wide, searched 3 cells out: fewer needless pairs than reach-wide cells.
+  constexpr int kCellsPerReach = 3;
+  Cells cells(grains, dimension, container, std::max(reach / kCellsPerReach, 2.0 * max_radius(grains)) * 1.0001);
+  const int search = static_cast<int>(std::ceil(reach / cells.width() - 1e-12));
+  const double reach2 = reach * reach;
   std::int64_t centres = 0;
-  for (std::size_t i = 0; i < grains.size(); ++i) {
+  for (const std::uint32_t i : cells.order()) {
     const Vec3& x = grains[i].x;
     if (!in_bulk_window(bulk, x, dimension)) continue;
     ++centres;
-    cells.for_neighbours(x, [&](std::uint32_t j) {
-      if (j == i) return;
-      const double r = cells.separation(grains[j].x, x).norm();
-      const int k = static_cast<int>(r / bin);
-      if (k < nbins) counts[k] += 1.0;
-    });
+    cells.for_neighbours(
+        x,
+        [&](std::uint32_t j, const Vec3& xj) {
+          if (j == i) return;
+          const double r2 = cells.separation(xj, x).squaredNorm();
+          if (r2 >= reach2) return;
+          const int k = static_cast<int>(std::sqrt(r2) / bin);
+          if (k < nbins) counts[k] += 1.0;
+        },
+        search);
   }
   const double density = double(centres) / bulk.window_volume;
   out.g.resize(nbins);
