@@ -252,6 +252,10 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
       {"contacts", res.contacts.size()},
   });
   meta["relax"] = info;
+  // The input's structural measures describe the input, not this packing; `btr relax` measures the
+  // relaxed grains itself and stores them under the same key.
+  meta.erase("measures");
+  meta.erase("metrics");  // the key packings written before the measures had one home carried
   res.relaxed.meta = meta;
   write_packing(dir, "relaxed", res.relaxed, {displacement});
 

@@ -107,7 +107,7 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
     mean, floor, names = reference_stats(refs)
     if not names:
         raise StepFailed("error-vs-runtime: the reference pours have no structural measure in common (empty bulk "
-                         "window?); use a larger scene (--count) or smaller window margins")
+                         "window?); use a larger scene (--count) or a smaller window margin (--margin)")
 
     ref_wall = float(np.mean([s["wall_seconds"] for s in ref_runs]))
     reference = {"seeds": list(range(1, ref_seeds + 1)), "mean": mean, "floor": floor,
