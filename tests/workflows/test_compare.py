@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from btrdem.compare import compare
-from btrdem.io import InputError, Packing, read_vtp_arrays, write_packing
+from btrdem.io import InputError, read_vtp_arrays
 from lattices import fcc
 from scenes import packing_with_scene
 

@@ -6,7 +6,6 @@ energy if POST's folder has kinetic.csv), and pre_displacement.vtp / post_displa
 grains at their BTR and relaxed positions with the displacement as point data, for ParaView)."""
 from __future__ import annotations
 
-import csv
 import os
 from pathlib import Path
 
