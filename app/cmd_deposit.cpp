@@ -130,7 +130,7 @@ int run(const Options& o, const CLI::App& cmd) {
       {"timings", {{"deposition", result.wall_seconds}, {"check", o.check ? json(check_seconds) : json(nullptr)},
                    {"measures", metrics_seconds}, {"writing", nullptr}}},
       {"check", check_json},
-      {"measures", measures_to_json(measures, scene.dimension)},
+      {"measures", measures_to_json(measures)},
   };
   double write_seconds = 0.0;
   try {
@@ -151,7 +151,7 @@ int run(const Options& o, const CLI::App& cmd) {
     std::printf("%s: %lld grains (%dD, %s container, seed %llu) in %.3f s, %.0f grains/s\n", scene.name.c_str(),
                 static_cast<long long>(n), scene.dimension, btr::to_string(scene.container.kind),
                 static_cast<unsigned long long>(seed), result.wall_seconds, rate);
-    std::fputs(measures_summary(measures, scene.dimension).c_str(), stdout);
+    std::fputs(measures_summary(measures).c_str(), stdout);
     if (o.check)
       std::printf("  check: %s in %.3f s\n", report.ok() ? "ok" : "FAILED", check_seconds);
     std::printf("  wrote %s/%s.csv, .json, .vtp in %.3f s; %.3f s in all\n", o.out.c_str(), name.c_str(),

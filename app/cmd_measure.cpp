@@ -88,7 +88,7 @@ Runner add_measure_command(CLI::App& app) {
     try {
       const btr::Scene& sc = p.scene;
       const btr::PackingMeasures m = measure_in_scene(p.packing.grains, sc, o->metrics);
-      const std::string text = measures_to_json(m, sc.dimension).dump(1) + "\n";
+      const std::string text = measures_to_json(m).dump(1) + "\n";
       if (o->out.empty()) std::cout << text;
       else write_text_atomically(o->out, text);
       if (!o->per_grain.empty()) write_text_atomically(o->per_grain, per_grain_csv(p.packing.grains, sc.dimension, m));

@@ -50,7 +50,7 @@ Runner add_relax_command(CLI::App& app) {
       const std::string engine = o->engine.empty() ? p.scene.relax.engine : o->engine;
       btr::RelaxResult r = btr::relax(p.packing, p.scene, engine, o->settings, o->out);
       // The relaxed packing's measures, by the same definition as the deposit's, stored in relaxed.json.
-      r.relaxed.meta["measures"] = measures_to_json(measure_in_scene(r.relaxed.grains, p.scene), p.scene.dimension);
+      r.relaxed.meta["measures"] = measures_to_json(measure_in_scene(r.relaxed.grains, p.scene));
       btr::write_packing_meta(o->out, "relaxed", r.relaxed.meta);
       std::cout << engine << ": stopped by " << r.stop_reason << " at t = " << r.simulated_time << " s after "
                 << r.wall_seconds << " s wall time; final kinetic energy "

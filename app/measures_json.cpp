@@ -29,7 +29,7 @@ btr::PackingMeasures measure_in_scene(const btr::Grains& grains, const btr::Scen
                               scene.source.y);
 }
 
-json measures_to_json(const btr::PackingMeasures& m, int dimension) {
+json measures_to_json(const btr::PackingMeasures& m) {
   const btr::MetricsOptions& o = m.options;
   const btr::BulkMeasures& b = m.bulk;
   json bulk = {{"valid", b.valid},
@@ -58,6 +58,7 @@ json measures_to_json(const btr::PackingMeasures& m, int dimension) {
     const btr::HeapMeasures& h = m.heap;
     heap = {{"valid", h.valid},
             {"axis", {m.source_x, m.source_y}},
+            {"profile_of", h.by_sides ? "x - axis x (each side fitted)" : "distance from the axis"},
             {"height", h.height},
             {"fit_band", {btr::HeapMeasures::kLowFraction, btr::HeapMeasures::kHighFraction}},
             {"fit_rule", "least-squares line through the surface profile of the pile from the apex outwards, from "
@@ -68,7 +69,7 @@ json measures_to_json(const btr::PackingMeasures& m, int dimension) {
             {"profile", profile_json(h.profile)}};
     if (h.valid) {
       heap["angle_of_repose_deg"] = h.angle_deg;
-      if (dimension == 2) heap["angle_left_deg"] = h.angle_left_deg, heap["angle_right_deg"] = h.angle_right_deg;
+      if (h.by_sides) heap["angle_left_deg"] = h.angle_left_deg, heap["angle_right_deg"] = h.angle_right_deg;
     } else {
       heap["note"] = h.note;
     }
@@ -85,7 +86,7 @@ json measures_to_json(const btr::PackingMeasures& m, int dimension) {
           {"height", {{"max_top", m.max_top}, {"mean_centre", m.mean_centre_height}}}};
 }
 
-std::string measures_summary(const btr::PackingMeasures& m, int dimension) {
+std::string measures_summary(const btr::PackingMeasures& m) {
   char buf[600];
   const btr::BulkMeasures& b = m.bulk;
   if (b.valid)
@@ -99,7 +100,7 @@ std::string measures_summary(const btr::PackingMeasures& m, int dimension) {
   std::string out = buf;
   if (m.heap_source) {
     const btr::HeapMeasures& h = m.heap;
-    if (h.valid && dimension == 2)
+    if (h.valid && h.by_sides)
       std::snprintf(buf, sizeof buf, "  heap: height %.4g m, angle of repose %.2f deg (left %.2f, right %.2f)\n",
                     h.height, h.angle_deg, h.angle_left_deg, h.angle_right_deg);
     else if (h.valid)

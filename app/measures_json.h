@@ -13,9 +13,9 @@ namespace btr_app {
 btr::PackingMeasures measure_in_scene(const btr::Grains& grains, const btr::Scene& scene,
                                       const btr::MetricsOptions& options = {});
 
-nlohmann::json measures_to_json(const btr::PackingMeasures& m, int dimension);
+nlohmann::json measures_to_json(const btr::PackingMeasures& m);
 
 // One line each for the bulk and the heap, for the programs' summaries.
-std::string measures_summary(const btr::PackingMeasures& m, int dimension);
+std::string measures_summary(const btr::PackingMeasures& m);
 
 }  // namespace btr_app

@@ -561,8 +561,10 @@ std::vector<ProfilePoint> surface_profile(const Grains& grains, const std::vecto
   return out;
 }
 
-HeapMeasures heap_measures(const Grains& grains, int dimension, double source_x, double source_y) {
+HeapMeasures heap_measures(const Grains& grains, int dimension, double source_x, double source_y,
+                           bool by_sides) {
   HeapMeasures h;
+  h.by_sides = by_sides;
   if (grains.empty()) {
     h.note = "no grains";
     return h;
@@ -572,10 +574,10 @@ HeapMeasures heap_measures(const Grains& grains, int dimension, double source_x,
   const double lo = HeapMeasures::kLowFraction * h.height, hi = HeapMeasures::kHighFraction * h.height;
   std::vector<double> coord(grains.size());
   for (std::size_t i = 0; i < grains.size(); ++i)
-    coord[i] = dimension == 3 ? std::hypot(grains[i].x.x() - source_x, grains[i].x.y() - source_y)
-                              : grains[i].x.x() - source_x;
+    coord[i] = by_sides ? grains[i].x.x() - source_x
+                        : std::hypot(grains[i].x.x() - source_x, dimension == 3 ? grains[i].x.y() - source_y : 0.0);
   h.profile = surface_profile(grains, coord);
-  if (dimension == 3) {
+  if (!by_sides) {
     std::vector<ProfilePoint> samples(grains.size());
     for (std::size_t i = 0; i < grains.size(); ++i) samples[i] = {coord[i], grains[i].x.z() + grains[i].r};
     const Flank f = fit_flank(binned_profile(samples, width), lo, hi);
@@ -769,7 +771,9 @@ PackingMeasures measure_packing(const Grains& grains, int dimension, const Conta
   m.mean_coordination_all = total / double(grains.size());
   m.bulk = bulk_measures(grains, dimension, container, options, &m.coordination);
   m.rdf = radial_distribution(grains, dimension, container, m.bulk, options);
-  if (heap_source) m.heap = heap_measures(grains, dimension, source_x, source_y);
+  if (heap_source)
+    m.heap = heap_measures(grains, dimension, source_x, source_y,
+                           dimension == 2 || container.kind == ContainerKind::HeleShaw);
   std::vector<double> x(grains.size());
   for (std::size_t i = 0; i < grains.size(); ++i) x[i] = grains[i].x.x();
   m.profile_x = surface_profile(grains, x);

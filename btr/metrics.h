@@ -47,12 +47,13 @@ struct HeapMeasures {
   bool valid = false;
   std::string note;
   double height = 0.0;           // highest grain top above the floor (the apex)
-  double angle_deg = 0.0;        // 3D: from the radial profile; 2D: mean of both sides
-  double angle_left_deg = 0.0;   // 2D only
-  double angle_right_deg = 0.0;  // 2D only
+  bool by_sides = false;         // 2D and Hele-Shaw: each side of the axis fitted on its own
+  double angle_deg = 0.0;        // radial profile, or the mean of both sides
+  double angle_left_deg = 0.0;   // by_sides only
+  double angle_right_deg = 0.0;  // by_sides only
   int profile_points = 0;        // profile points in the fitted flanks
   std::int64_t grains_beyond_flank = 0;  // grains beyond the lower end of the fitted flank (foot, strays)
-  std::vector<ProfilePoint> profile;    // 3D: against the distance from the axis; 2D: against x - source x
+  std::vector<ProfilePoint> profile;    // against the distance from the axis, or x - source x (by_sides)
 };
 
 struct RadialDistribution {
@@ -106,7 +107,13 @@ std::vector<ProfilePoint> surface_profile(const Grains& grains, const std::vecto
 // first falls to 80 % of the apex height to where it first falls below 20 %. The angle is the least-
 // squares line through the flank. Grains beyond the flank's foot (strays that rolled away, a flat tail)
 // never enter the fit.
-HeapMeasures heap_measures(const Grains& grains, int dimension, double source_x, double source_y);
+// by_sides: fit each side of the axis on |x - source_x| (2D, and 3D Hele-Shaw cells, whose heap is a 2D
+// pile between the plates); otherwise on the distance from the axis.
+HeapMeasures heap_measures(const Grains& grains, int dimension, double source_x, double source_y,
+                           bool by_sides);
+inline HeapMeasures heap_measures(const Grains& grains, int dimension, double source_x, double source_y) {
+  return heap_measures(grains, dimension, source_x, source_y, dimension == 2);
+}
 
 // g(r): the grains centred in the bulk window as centres, every grain as a neighbour (periodic sides
 // wrap), normalised by the window's number density (grains centred in it / its volume); r in mean

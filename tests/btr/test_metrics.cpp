@@ -289,6 +289,26 @@ TEST(HeapMeasures, ConicalHeap) {
   EXPECT_NEAR(m.angle_deg, theta, 1e-9);
 }
 
+// A Hele-Shaw heap is a 2D pile between the plates: each side is fitted on its own, as in 2D.
+TEST(HeapMeasures, HeleShawHeapIsFittedSideBySide) {
+  const double r = 1e-3, H0 = 0.05, left = 24.0, right = 34.0;
+  Grains g;
+  for (int k = -100; k < 100; ++k) {
+    const double x = (k + 0.5) * 2 * r, t = std::tan((x < 0 ? left : right) * kPi / 180);
+    const double h = std::max(2 * r, H0 - t * std::abs(x));
+    column(g, x, (k % 2 ? 0.5 : -0.5) * r, h, r);  // centres staggered across a 3 r gap
+  }
+  Container cell;
+  cell.kind = ContainerKind::HeleShaw;
+  cell.size_x = 0.4;
+  cell.gap = 3 * r;
+  const PackingMeasures m = measure_packing(g, 3, cell, {}, true, 0.0, 0.0);
+  ASSERT_TRUE(m.heap.valid) << m.heap.note;
+  EXPECT_TRUE(m.heap.by_sides);
+  EXPECT_NEAR(m.heap.angle_left_deg, left, 1e-9);
+  EXPECT_NEAR(m.heap.angle_right_deg, right, 1e-9);
+}
+
 TEST(HeapMeasures, FlatBedHasNoSlope) {
   Grains g;
   for (int i = -30; i < 30; ++i) column(g, i * 2e-3, 0.0, 0.02, 1e-3);
@@ -370,8 +390,11 @@ TEST(RadialDistribution, SimpleCubicShellsCountTheirNeighbours) {
   EXPECT_NEAR(neighbours_near(std::sqrt(2.0)), 12.0, 1e-9);
   EXPECT_NEAR(neighbours_near(std::sqrt(3.0)), 8.0, 1e-9);
   EXPECT_NEAR(neighbours_near(2.0), 6.0, 1e-9);
-  for (std::size_t k = 0; k < rdf.g.size(); ++k)
-    if (rdf.r_over_d[k] < 0.97) EXPECT_EQ(rdf.g[k], 0.0) << rdf.r_over_d[k];
+  for (std::size_t k = 0; k < rdf.g.size(); ++k) {
+    if (rdf.r_over_d[k] < 0.97) {
+      EXPECT_EQ(rdf.g[k], 0.0) << rdf.r_over_d[k];
+    }
+  }
 }
 
 TEST(Segregation, VerticalAndRadialIndicesOfKnownArrangements) {
