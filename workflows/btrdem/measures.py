@@ -8,7 +8,9 @@ Comparisons of two measures (e.g. rdf_distance) live here too."""
 from __future__ import annotations
 
 import csv
+import json
 import subprocess
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -22,31 +24,33 @@ def measure(packing_csv, margin: float | None = None, contact_tolerance: float |
     """`btr measure PACKING.csv` -> the measures dict (the "measures" object of btr.json).
     margin / contact_tolerance: None keeps the program's defaults (the one default, named in the output).
     per_grain=True adds "per_grain": {"id", "coordination", "in_window", "surface_depth"} arrays.
-    out_json: where the JSON is kept (default PACKING.measures.json beside the packing)."""
+    out_json: also keep the JSON there (default: not kept)."""
     btr = btr or find_btr()
     packing_csv = Path(packing_csv)
-    out_json = Path(out_json) if out_json else packing_csv.with_suffix(".measures.json")
-    argv = [btr, "measure", str(packing_csv), "-o", str(out_json)]
+    argv = [btr, "measure", str(packing_csv)]
+    if out_json:
+        argv += ["-o", str(out_json)]
     if margin is not None:
         argv += ["--margin", repr(float(margin))]
     if contact_tolerance is not None:
         argv += ["--contact-tolerance", repr(float(contact_tolerance))]
     if scene_toml:
         argv += ["--scene", str(scene_toml)]
-    grain_csv = out_json.with_suffix(".per_grain.csv")
-    if per_grain:
-        argv += ["--per-grain", str(grain_csv)]
-    p = subprocess.run([str(a) for a in argv], capture_output=True, text=True)
-    if p.returncode != 0:
-        raise StepFailed(f"btr measure {packing_csv}: exit status {p.returncode}: {p.stderr.strip()[-2000:]}")
-    m = read_json(out_json)
-    if per_grain:
-        with open(grain_csv, newline="") as f:
-            rows = list(csv.DictReader(f))
-        m["per_grain"] = {"id": np.array([int(r["id"]) for r in rows]),
-                          "coordination": np.array([int(r["coordination"]) for r in rows]),
-                          "in_window": np.array([r["in_window"] == "1" for r in rows]),
-                          "surface_depth": np.array([float(r["surface_depth"]) for r in rows])}
+    with tempfile.TemporaryDirectory(prefix="btr_measure_") as tmp:
+        grain_csv = Path(tmp) / "per_grain.csv"
+        if per_grain:
+            argv += ["--per-grain", str(grain_csv)]
+        p = subprocess.run([str(a) for a in argv], capture_output=True, text=True)
+        if p.returncode != 0:
+            raise StepFailed(f"btr measure {packing_csv}: exit status {p.returncode}: {p.stderr.strip()[-2000:]}")
+        m = read_json(out_json) if out_json else json.loads(p.stdout)
+        if per_grain:
+            with open(grain_csv, newline="") as f:
+                rows = list(csv.DictReader(f))
+            m["per_grain"] = {"id": np.array([int(r["id"]) for r in rows]),
+                              "coordination": np.array([int(r["coordination"]) for r in rows]),
+                              "in_window": np.array([r["in_window"] == "1" for r in rows]),
+                              "surface_depth": np.array([float(r["surface_depth"]) for r in rows])}
     return m
 
 
