@@ -1,4 +1,4 @@
-// The `btr` program: deposit, bench, relax, export.
+// The `btr` program: deposit, bench, relax, export, shake.
 #include <iostream>
 
 #include "commands.h"
@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   remember(btr_app::add_bench_command(app));
   remember(btr_app::add_relax_command(app));
   remember(btr_app::add_export_command(app));
+  remember(btr_app::add_shake_command(app));
 
   try {
     app.parse(argc, argv);

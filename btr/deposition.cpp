@@ -95,6 +95,7 @@ struct Deposition::Impl {
   bool roll_along_cylinder(Vec3& x, double r, Contacts& active, int sphere, int cylinder, const Vec3& d,
                            const std::vector<Obstacle>& walls);
   bool at_bottom(const Vec3& x, const Contacts& active) const;
+  double free_start(double x, double y, double z, double r) const;
   Vec3 tie_break(const Vec3& x, const Contacts& active, std::uint64_t salt) const;
 };
 
@@ -315,6 +316,25 @@ bool Deposition::Impl::roll_along_cylinder(Vec3& x, double r, Contacts& active, 
 }
 
 // ---------------------------------------------------------------------------------------------
+// A given start height (dynamic BTR), raised above the floor and then straight up out of every fixed
+// grain it overlaps (each lift can only meet grains higher up, so this ends).
+double Deposition::Impl::free_start(double x, double y, double z, double r) const {
+  z = std::max(z, r);
+  const double reach = r + r_max;
+  for (bool moved = true; moved;) {
+    moved = false;
+    grid.visit_box(Vec3(x - reach, y - reach, z - reach), Vec3(x + reach, y + reach, z + reach),
+                   [&](std::int32_t, const Vec3& c, double radius, int) {
+                     const double R = r + radius, dx = x - c.x(), dy = y - c.y(), dz = z - c.z();
+                     if (dx * dx + dy * dy + dz * dz >= R * R * (1.0 - 1e-12)) return;
+                     const double up = c.z() + std::sqrt(std::max(0.0, R * R - dx * dx - dy * dy));
+                     if (up > z) z = up, moved = true;
+                   });
+  }
+  return z;
+}
+
+// ---------------------------------------------------------------------------------------------
 // With the weight carried by two supports, is the grain at the bottom of their common curve?
 bool Deposition::Impl::at_bottom(const Vec3& x, const Contacts& active) const {
   const Obstacle& a = active.item[0];
@@ -374,7 +394,7 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
   if (!misfit.empty()) throw PlacementError(id, "dropped outside the container: " + misfit);
 
   container_walls(container, dimension, r, walls);
-  Vec3 x(px, py, top + r + 2.0 * r_max);
+  Vec3 x(px, py, std::isnan(drop.z) ? top + r + 2.0 * r_max : free_start(px, py, drop.z, r));
   Contacts active;
   bool stable = false;
   for (int event = 0; event < max_events && !stable; ++event) {

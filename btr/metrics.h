@@ -67,6 +67,11 @@ double packing_fraction_in_box(const Grains& grains, int dimension, const Box& b
 BulkMeasures bulk_measures(const Grains& grains, int dimension, const Container& container,
                            const MetricsOptions& options = {}, const std::vector<int>* coordination = nullptr);
 
+// Mean height of the free surface: the container's footprint (cylinder: its inscribed square; open
+// floor: the grains' extent) cut into columns `width` wide, each with the highest grain top among the
+// grains centred in it; the mean over the columns that hold a grain. 0 without grains.
+double mean_surface_height(const Grains& grains, int dimension, const Container& container, double width);
+
 // For a heap poured from a point source at (source_x, source_y): free-surface profile = highest grain
 // top per radial bin (3D) or per x bin on each side (2D), bins one largest diameter wide; linear fit
 // of the profile points whose height lies between 20% and 80% of the heap height.

@@ -31,7 +31,7 @@ class SceneParser {
   }
 
   Scene parse() {
-    rd_.check_keys(root_, {"scene", "grains", "container", "source", "material", "relax"});
+    rd_.check_keys(root_, {"scene", "grains", "container", "source", "material", "relax", "intruder", "shaking"});
     scene_.file = path_;
     parse_scene(required_table("scene"));
     auto material = rd_.table(root_, "material", "[material]");
@@ -46,6 +46,8 @@ class SceneParser {
     parse_container(container);
     parse_source(source, source_kind);
     finish_list_source(grains);
+    parse_intruder();
+    parse_shaking();
     check_container_holds_grains(container);
     check_source_fits(source);
     return scene_;
@@ -76,6 +78,47 @@ class SceneParser {
     scene_.dimension = static_cast<int>(*d);
     scene_.seed = static_cast<std::uint64_t>(
         rd_.integer(s, "seed", [](std::int64_t v) { return v >= 0; }, "an integer >= 0").value_or(1));
+  }
+
+  void parse_intruder() {
+    auto s = rd_.table(root_, "intruder", "[intruder]");
+    if (!s) return;
+    rd_.check_keys(*s, {"diameter_ratio", "position"});
+    const GrainsSpec& g = scene_.grains;
+    if (list_source_ || g.components.size() != 1 || g.components[0].radius.kind != RadiusSpec::Kind::Constant)
+      rd_.fail(s->line, "[intruder]: expected a bed of equal grains (one component, grains.radius = { distribution "
+                        "= \"constant\", ... }, not a list source) for the intruder's diameter ratio to refer to");
+    IntruderSpec in;
+    in.diameter_ratio = rd_.required_number(*s, "diameter_ratio", positive, "a positive diameter ratio Phi");
+    const std::string expect = dim() == 2 ? "[x] for dimension 2" : "[x, y] for dimension 3";
+    if (auto p = rd_.numbers(*s, "position", dim() - 1, any, expect)) {
+      in.x = (*p)[0];
+      in.y = dim() == 3 ? (*p)[1] : 0.0;
+    }
+    in.species = g.components[0].species + 1;
+    const double r = in.diameter_ratio * g.components[0].radius.value;
+    r_max_ = std::max(r_max_, r);
+    if (!disk_fits(in.x, in.y, 0.0, r))
+      rd_.fail(s->line, "intruder.position: expected a drop that keeps the intruder (r = " + fmt(r) +
+                            " m) inside the " + to_string(scene_.container.kind) + " container: " + allowed_text(r) +
+                            ", got [" + fmt(in.x) + (dim() == 3 ? ", " + fmt(in.y) : "") + "]");
+    scene_.intruder = in;
+  }
+
+  void parse_shaking() {
+    auto s = rd_.table(root_, "shaking", "[shaking]");
+    if (!s) return;
+    rd_.check_keys(*s, {"cycles", "lift", "noise", "snapshot_every"});
+    ShakingSpec sh;
+    auto cycles = rd_.integer(*s, "cycles", [](std::int64_t v) { return v > 0; }, "a positive number of cycles");
+    if (!cycles) rd_.missing(*s, "cycles", "a positive number of cycles");
+    sh.cycles = *cycles;
+    sh.lift = rd_.required_number(*s, "lift", positive, "a positive lift of the whole pile [m]");
+    sh.noise = rd_.number_or(*s, "noise", 0.0, non_negative, "a noise amplitude >= 0 [m]");
+    sh.snapshot_every = rd_.integer(*s, "snapshot_every", [](std::int64_t v) { return v > 0; },
+                                    "a positive number of cycles")
+                            .value_or(sh.cycles);
+    scene_.shaking = sh;
   }
 
   Material parse_material(const Section& s, const Material& base) {

@@ -56,6 +56,20 @@
 //   engine "liggghts" | "yade" (liggghts), model "hertz" | "hooke" (hertz), max_time > 0 [s] (0.2),
 //   stop_kinetic_ratio > 0 (1e-6), timestep_fraction in (0, 1] (0.2), timestep > 0 [s] (optional)
 //
+// [intruder]                     optional (Brazil nut): one larger grain, dropped first (it rests on the
+//                                floor under the bed); needs a bed of equal grains (one component,
+//                                constant radius, no list source). It comes in addition to grains.count.
+//   diameter_ratio  > 0          intruder diameter / bed grain diameter (Phi)
+//   position        [x] (2D) or [x, y] (3D), default the origin; must keep the intruder inside
+//   The intruder's species is the bed's species + 1.
+//
+// [shaking]                      optional; used by `btr shake` (dynamic BTR, seed 001 section 6.6)
+//   cycles          integer > 0  number of shaking cycles
+//   lift            > 0 [m]      how far the whole pile is raised before each redeposition
+//   noise           >= 0 [m]     amplitude a of the random horizontal displacement per grain and cycle,
+//                                uniform in [-a, a] on each horizontal axis (default 0: deterministic)
+//   snapshot_every  integer > 0  cycles between snapshots (default: cycles)
+//
 // Errors name the file, the line, the key and what was expected, e.g.
 //   inputs/x.toml:12: grains.count: expected a positive integer, got 0
 //   inputs/x.toml:7: unknown key 'sise' in [container]; allowed: kind, size, gap, radius, height
