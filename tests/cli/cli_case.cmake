@@ -1,7 +1,7 @@
 # One end-to-end case of the `btr` program, run by ctest:
 #   cmake -DBTR=<program> -DINPUTS=<inputs dir> -DWORK=<scratch dir> -DCASE=<case>
 #         [-DSCENE=<name in inputs/>] [-DCOUNT=<grains>] -P cli_case.cmake
-# Cases: deterministic, check, missing_scene, unknown_key. Fails with message(FATAL_ERROR).
+# Cases: deterministic, check, missing_scene, unknown_key, shake_series, shake_without_table. Fails with message(FATAL_ERROR).
 cmake_minimum_required(VERSION 3.18)
 
 # Runs the program; sets <prefix>_code and <prefix>_text (stdout + stderr).
@@ -77,6 +77,52 @@ elseif(CASE STREQUAL "unknown_key")
   expect_code(r 2)
   expect_mentions(r "typo_scene.toml")
   expect_mentions(r "typo_key")
+
+elseif(CASE STREQUAL "shake_series")
+  # Dynamic BTR: same scene and seed twice give byte-identical snapshots (CSV, VTP) and per-cycle
+  # tables (less the wall-time column); every snapshot passes --check; the .pvd lists every snapshot.
+  foreach(run a b)
+    run_btr(r shake "${scene}" -o "${WORK}/${run}" --cycles 4 --check --quiet)
+    expect_code(r 0)
+  endforeach()
+  file(GLOB snaps RELATIVE "${WORK}/a" "${WORK}/a/${SCENE}_c[0-9]*.csv" "${WORK}/a/${SCENE}_c[0-9]*.vtp")
+  list(LENGTH snaps n_snaps)
+  if(n_snaps LESS 4)
+    message(FATAL_ERROR "expected snapshots at cycles 0 and 4 (CSV + VTP), got: ${snaps}")
+  endif()
+  foreach(f ${snaps})
+    execute_process(COMMAND ${CMAKE_COMMAND} -E compare_files "${WORK}/a/${f}" "${WORK}/b/${f}" RESULT_VARIABLE same)
+    if(NOT same EQUAL 0)
+      message(FATAL_ERROR "${f} differs between two runs with the same seed")
+    endif()
+  endforeach()
+  foreach(run a b)
+    file(STRINGS "${WORK}/${run}/${SCENE}_cycles.csv" rows)
+    set(stripped_${run} "")
+    foreach(row ${rows})
+      string(REGEX REPLACE "^([^,]*),[^,]*," "\\1,," row "${row}")
+      list(APPEND stripped_${run} "${row}")
+    endforeach()
+  endforeach()
+  list(LENGTH stripped_a n_rows)
+  if(NOT n_rows EQUAL 6)
+    message(FATAL_ERROR "expected a header and 5 rows (cycles 0..4) in ${SCENE}_cycles.csv, got ${n_rows} lines")
+  endif()
+  if(NOT "${stripped_a}" STREQUAL "${stripped_b}")
+    message(FATAL_ERROR "the per-cycle tables differ between two runs with the same seed")
+  endif()
+  file(READ "${WORK}/a/${SCENE}.pvd" pvd)
+  foreach(c 000000 000004)
+    string(FIND "${pvd}" "file=\"${SCENE}_c${c}.vtp\"" at)
+    if(at EQUAL -1)
+      message(FATAL_ERROR "${SCENE}.pvd does not list ${SCENE}_c${c}.vtp:\n${pvd}")
+    endif()
+  endforeach()
+
+elseif(CASE STREQUAL "shake_without_table")
+  run_btr(r shake "${scene}" -o "${WORK}/out")
+  expect_code(r 2)
+  expect_mentions(r "missing table [shaking]")
 
 else()
   message(FATAL_ERROR "unknown case '${CASE}'")
