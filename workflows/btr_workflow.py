@@ -6,6 +6,7 @@
   pipeline [SCENE] [-o OUTDIR]            BTR -> DEM relaxation -> comparison -> report (default inputs/bed3d.toml)
   error-vs-runtime SCENE [-o OUTDIR]      error of BTR, BTR + relaxation and DEM pours against a pour reference
   stability [-o OUTDIR] [--tiny]          relaxation stability sweep in each engine
+  brazil-nut [-o OUTDIR] [--tiny]         intruder rise under dynamic BTR shaking, Phi sweep, 3D and 2D
 
 The `btr` program is $BTR_BINARY, else build/app/btr. Exit status: 0 done, 2 bad input, 3 a step failed
 (its error is printed and recorded in OUTDIR/run.json; what earlier steps wrote is kept)."""
@@ -105,6 +106,12 @@ def main(argv=None) -> int:
     s.add_argument("--max-steps", type=int)
     s.add_argument("--np", type=int, default=1)
 
+    bn = sub.add_parser("brazil-nut", help="Brazil-nut effect under dynamic BTR shaking (btr shake)")
+    bn.add_argument("-o", "--out", help="output folder (default out/brazil_nut)")
+    bn.add_argument("--dims", default="3,2", help="dimensions, comma-separated (default 3,2)")
+    bn.add_argument("--tiny", action="store_true", help="two Phi and two noise values, a few hundred grains, 6 cycles")
+    bn.add_argument("--seed", type=int, default=1)
+
     args = ap.parse_args(argv)
     try:
         if args.command == "compare":
@@ -146,6 +153,12 @@ def main(argv=None) -> int:
             if bad:
                 raise InputError(f"--engines: expected liggghts and/or yade, got {', '.join(bad)}")
             run_stability(args.out, engines, args.scene, args.tiny, args.max_steps, args.np, progress)
+        elif args.command == "brazil-nut":
+            from btrdem.brazil_nut import run_brazil_nut
+            dims = [x for x in args.dims.split(",") if x]
+            if not dims or any(x not in ("2", "3") for x in dims):
+                raise InputError(f"--dims: expected 3 and/or 2, comma-separated, got {args.dims!r}")
+            run_brazil_nut(args.out, tuple(int(x) for x in dims), args.tiny, args.seed, progress)
     except InputError as e:
         print(f"btr_workflow.py {args.command}: {e}", file=sys.stderr)
         return 2
