@@ -154,6 +154,10 @@ void DropSequence::position(double r, Drop& d) {
     case SourceSpec::Kind::Rain:
       switch (c.kind) {
         case ContainerKind::Cylinder: disk(c.radius - r, d.x, d.y); break;
+        case ContainerKind::Drum:  // over the drum's width, clear of its end walls
+          d.x = -(c.radius - r) + uniform() * 2.0 * (c.radius - r);
+          if (three) d.y = (-0.5 * c.size_y + r) + uniform() * (c.size_y - 2.0 * r);
+          break;
         case ContainerKind::Periodic:
           d.x = -0.5 * c.size_x + uniform() * c.size_x;
           if (three) d.y = -0.5 * c.size_y + uniform() * c.size_y;

@@ -78,6 +78,15 @@ struct ShakingSpec {
   std::int64_t snapshot_every = 0;  // cycles between snapshots (the initial and last are always written)
 };
 
+// Dynamic BTR in a rotating drum (seed 000 section 6): per step, rotate every grain with the drum by
+// 2 pi / steps_per_revolution about its axis, lift every grain by `lift`, redeposit them lowest first.
+struct DrumSpec {
+  std::int64_t steps_per_revolution = 100;
+  double revolutions = 1.0;
+  double lift = 0.0;                // m; default radius / 10
+  std::int64_t snapshot_every = 0;  // steps between snapshots (the initial and last are always written)
+};
+
 struct Scene {
   std::string name;
   std::string file;  // path it was read from
@@ -89,6 +98,7 @@ struct Scene {
   RelaxSpec relax;
   std::optional<IntruderSpec> intruder;
   std::optional<ShakingSpec> shaking;
+  std::optional<DrumSpec> drum;
 };
 
 }  // namespace btr

@@ -160,6 +160,11 @@ json scene_to_json(const Scene& s) {
                        {"x", s.intruder->x},
                        {"y", s.intruder->y},
                        {"species", s.intruder->species}};
+  if (s.drum)
+    out["drum"] = {{"steps_per_revolution", s.drum->steps_per_revolution},
+                   {"revolutions", s.drum->revolutions},
+                   {"lift", s.drum->lift},
+                   {"snapshot_every", s.drum->snapshot_every}};
   if (s.shaking)
     out["shaking"] = {{"cycles", s.shaking->cycles},
                       {"lift", s.shaking->lift},
@@ -219,7 +224,7 @@ Scene scene_from_json(const json& j, const std::string& origin) {
   Reader rd(origin);
   if (!j.is_object()) rd.fail("", "expected the scene as a JSON object");
   rd.check_keys(j, "", {"name", "file", "dimension", "seed", "grains", "container", "source", "relax", "intruder",
-                     "shaking"});
+                     "shaking", "drum"});
   Scene s;
   s.name = rd.string(j, "", "name");
   s.file = rd.string(j, "", "file");
@@ -253,9 +258,9 @@ Scene scene_from_json(const json& j, const std::string& origin) {
   std::string kind = rd.string(c, "container", "kind");
   bool found = false;
   for (ContainerKind k : {ContainerKind::Open, ContainerKind::Box, ContainerKind::Periodic, ContainerKind::HeleShaw,
-                          ContainerKind::Cylinder})
+                          ContainerKind::Cylinder, ContainerKind::Drum})
     if (kind == to_string(k)) s.container.kind = k, found = true;
-  if (!found) rd.fail("container.kind", "expected open, box, periodic, hele-shaw or cylinder, got '" + kind + "'");
+  if (!found) rd.fail("container.kind", "expected open, box, periodic, hele-shaw, cylinder or drum, got '" + kind + "'");
   s.container.size_x = rd.number(c, "container", "size_x");
   s.container.size_y = rd.number(c, "container", "size_y");
   s.container.gap = rd.number(c, "container", "gap");
@@ -298,6 +303,15 @@ Scene scene_from_json(const json& j, const std::string& origin) {
     spec.y = rd.number(in, "intruder", "y");
     spec.species = static_cast<int>(rd.integer(in, "intruder", "species"));
     s.intruder = spec;
+  }
+  if (j.contains("drum")) {
+    const json& dr = rd.object(j, "", "drum", {"steps_per_revolution", "revolutions", "lift", "snapshot_every"});
+    DrumSpec spec;
+    spec.steps_per_revolution = rd.integer(dr, "drum", "steps_per_revolution");
+    spec.revolutions = rd.number(dr, "drum", "revolutions");
+    spec.lift = rd.number(dr, "drum", "lift");
+    spec.snapshot_every = rd.integer(dr, "drum", "snapshot_every");
+    s.drum = spec;
   }
   if (j.contains("shaking")) {
     const json& sh = rd.object(j, "", "shaking", {"cycles", "lift", "noise", "snapshot_every"});

@@ -138,7 +138,7 @@ TEST(SceneInputs, MixtureAndListScenesAreReadAsWritten) {
 TEST_F(SceneFile, UnknownKeyNamesFileLineAndAllowedKeys) {
   const std::string text = replace(kBase, "size = [0.02, 0.02]", "sise = [0.02, 0.02]");
   EXPECT_EQ(error_of(text),
-            at(text, "sise") + "unknown key 'sise' in [container]; allowed: kind, size, gap, radius, height");
+            at(text, "sise") + "unknown key 'sise' in [container]; allowed: kind, size, gap, radius, height, length");
 }
 
 TEST_F(SceneFile, UnknownKeyInsideAnInlineTable) {
