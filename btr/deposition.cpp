@@ -94,7 +94,7 @@ struct Deposition::Impl {
   void roll_on_arc(Vec3& x, double r, Contacts& active, const CircleArc& arc, const std::vector<Obstacle>& walls);
   bool roll_along_drum(Vec3& x, double r, Contacts& active, int sphere, int drum, const std::vector<Obstacle>& walls);
   bool drum_rest(const Vec3& x, const Contacts& active) const;
-  double drum_start(double x, double y, double z, double r) const;
+  void drum_start(Vec3& x, double z, double r) const;
   bool roll_along_cylinder(Vec3& x, double r, Contacts& active, int sphere, int cylinder, const Vec3& d,
                            const std::vector<Obstacle>& walls);
   bool at_bottom(const Vec3& x, const Contacts& active) const;
@@ -208,9 +208,12 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
     double t = first_rising_root(a, b, R2 - K, touching ? kSkipTangency : 0.0, ev.t + t_tol);
     if (t >= 0.0) ev.offer(t, o, t_tol);
   };
+  // In a drum the floor only touches the drum's lowest line, where the drum wall is met first.
+  const bool drum_container = container.kind == ContainerKind::Drum;
   for (const Obstacle& w : walls) {
     if (w.kind == Obstacle::Kind::Cylinder) offer_cylinder(w);
     else if (w.kind == Obstacle::Kind::Drum) offer_drum(w);
+    else if (drum_container && w.is_floor()) continue;
     else offer_plane(w);
   }
   const Vec3 reach = Vec3::Constant(r + r_max);
@@ -370,19 +373,26 @@ double Deposition::Impl::free_start(double x, double y, double z, double r) cons
 }
 
 // ---------------------------------------------------------------------------------------------
-// The drum: a start inside the drum's section above x (a lifted grain never leaves the drum), and
-// an error when the fixed grains leave no room there.
-double Deposition::Impl::drum_start(double x, double y, double z, double r) const {
+// The drum: a start inside the drum's section at x (a lifted grain never leaves the drum), moved
+// straight up out of fixed grains. Near the wall the section is short: when the fixed grains fill it
+// up to the wall, the start moves inwards in steps of one radius to the first column with room.
+void Deposition::Impl::drum_start(Vec3& x, double z, double r) const {
   const double Rc = container.radius - r, za = container.radius;
-  const double half_chord = std::sqrt(std::max(0.0, Rc * Rc - x * x));
-  const double top_inside = za + half_chord;
-  z = free_start(x, y, std::clamp(z, za - half_chord, top_inside), r);
-  if (z > top_inside + 1e-12 * r) {
-    std::ostringstream why;
-    why << "no room in the drum above x = " << x << ": the grains already placed reach its wall there";
-    throw PlacementError(static_cast<std::int64_t>(grains.size()) + 1, why.str());
+  const double x0 = x.x(), inward = x0 > 0.0 ? -1.0 : 1.0;
+  for (int k = 0; k * r <= std::abs(x0) + r; ++k) {
+    const double xk = k * r >= std::abs(x0) ? 0.0 : x0 + inward * k * r;
+    const double half_chord = std::sqrt(std::max(0.0, Rc * Rc - xk * xk));
+    const double top_inside = za + half_chord;
+    const double zk = free_start(xk, x.y(), std::clamp(z, za - half_chord, top_inside), r);
+    if (zk <= top_inside + 1e-12 * r) {
+      x.x() = xk;
+      x.z() = std::min(zk, top_inside);
+      return;
+    }
   }
-  return std::min(z, top_inside);
+  std::ostringstream why;
+  why << "no room in the drum for a grain dropped at x = " << x0 << ": the grains already placed fill it";
+  throw PlacementError(static_cast<std::int64_t>(grains.size()) + 1, why.str());
 }
 
 // At rest on the drum wall: alone or with an end wall (gravity balanced only on the lowest line), or
@@ -441,7 +451,7 @@ bool Deposition::Impl::roll_along_drum(Vec3& x, double r, Contacts& active, int 
     for (const Obstacle& o : candidates)
       if (!active.has(o.key) && o.gap(P) < -gap_tol) return 1;
     for (const Obstacle& w : walls)
-      if (w.key != drum.key && w.gap(P) < -gap_tol) return 1;
+      if (w.key != drum.key && !w.is_floor() && w.gap(P) < -gap_tol) return 1;
     const double s = p.R * p.R - (P.x() - p.c.x()) * (P.x() - p.c.x()) - (P.z() - p.c.z()) * (P.z() - p.c.z());
     const double dx = Rc * std::cos(f), dz = Rc * std::sin(f);
     const double dy = -yside * ((P.x() - p.c.x()) * dx + (P.z() - p.c.z()) * dz) / std::sqrt(std::max(s, 1e-300));
@@ -481,7 +491,7 @@ bool Deposition::Impl::roll_along_drum(Vec3& x, double r, Contacts& active, int 
           for (const Obstacle& o : candidates)
             if (o.gap(P1) < -gap_tol) active.add(o);
           for (const Obstacle& w : walls)
-            if (w.key != drum.key && w.gap(P1) < -gap_tol) active.add(w);
+            if (w.key != drum.key && !w.is_floor() && w.gap(P1) < -gap_tol) active.add(w);
           return false;
         }
         case 2: active.remove(si); return false;
@@ -557,11 +567,12 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
   container_walls(container, dimension, r, walls);
   Vec3 x(px, py, 0.0);
   if (container.kind == ContainerKind::Drum)
-    x.z() = drum_start(px, py, std::isnan(drop.z) ? top + r + 2.0 * r_max : drop.z, r);
+    drum_start(x, std::isnan(drop.z) ? top + r + 2.0 * r_max : drop.z, r);
   else
     x.z() = std::isnan(drop.z) ? top + r + 2.0 * r_max : free_start(px, py, drop.z, r);
   Contacts active;
   bool stable = false;
+  int drum_stalls = 0;
   for (int event = 0; event < max_events && !stable; ++event) {
     Vec3 normals[kMaxContacts];
     for (int i = 0; i < active.n; ++i) normals[i] = active.item[i].normal(x);
@@ -573,6 +584,9 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
     Vec3 d = descent.direction;
     // Gravity balanced by as many independent supports as the dimension: d is round-off.
     if (active.n >= dimension) d = Vec3::Zero();
+    // On the drum's lowest line the wall's normal is vertical up to round-off: what is left of gravity
+    // is round-off too (it would only start arcs of length ~1e-8 that end where they began).
+    if (container.kind == ContainerKind::Drum && d.squaredNorm() < 1e-18) d = Vec3::Zero();
 
     if (d.isZero()) {
       bool on_floor = false;
@@ -608,10 +622,20 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
         arc.u = (x - arc.C).normalized();
         arc.v = Vec3::UnitY().cross(arc.u);
         if (arc.v.dot(d) < 0.0) arc.v = -arc.v;
-        double t_low = std::atan2(-arc.v.z(), -arc.u.z());
-        if (t_low <= 0.0) t_low += kTwoPi;
+        const double t_low = std::atan2(-arc.v.z(), -arc.u.z());
+        if (t_low <= 1e-12 || t_low >= M_PI) {  // on the lowest line already (up to round-off)
+          stable = true;
+          break;
+        }
         arc.t_end = t_low;
+        const Vec3 before = x;
         roll_on_arc(x, r, active, arc, walls);
+        // Wedged a hair (~1e-8 rad) beside the lowest line against a grain that the descent, at round-off,
+        // finds unloaded: the arc stops where it starts, again and again. The grain is at rest there.
+        if ((x - before).squaredNorm() <= 1e-24 * r * r && ++drum_stalls >= 3) {
+          stable = true;
+          break;
+        }
         continue;
       }
       if (spheres == 1 && planes == 0 && cylinders == 0 && dimension == 3) {
@@ -678,6 +702,9 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
     std::ostringstream why;
     why << "no stable position after " << max_events << " events; last at (" << x.x() << ", " << x.y() << ", "
         << x.z() << ") with " << active.n << " contacts";
+    const char* names[] = {"grain", "plane", "cylinder", "drum"};
+    for (int i = 0; i < active.n; ++i) why << (i ? ", " : " (") << names[static_cast<int>(active.item[i].kind)];
+    if (active.n) why << ")";
     throw PlacementError(id, why.str());
   }
   if (container.kind == ContainerKind::Periodic) {
