@@ -26,7 +26,7 @@ def test_brazil_nut_tiny(tmp_path, source_dir, btr_binary):
     run = json.loads((out / "run.json").read_text())
     assert run["status"] == "ok" and run["summary"]["failed_cases"] == []
     report = (out / "report.md").read_text()
-    assert "| 3D | 0 | between 1.5 and 4 |" in report
+    assert "| 3D | 0 | between 1.5 and 4 |" in report  # the deterministic model: Phi = 4 rises, 1.5 does not
     for png in ("height_vs_cycles.png", "rise_vs_phi.png", "packing_vs_cycles.png"):
         assert (out / png).stat().st_size > 1000
     # Each case kept its snapshot series with the ParaView index.
@@ -43,7 +43,10 @@ def test_summarise_and_threshold_by_hand():
     assert s["reached_top"] and s["cycles_to_top"] == 2
     assert math.isclose(s["rise_d_per_cycle"], 1.0)
     assert math.isclose(s["seconds_per_cycle"], 0.1)
-    rows = [{"dimension": 3, "noise_d": 0.0, "phi": f, "status": "ok", "reached_top": f > 2.5} for f in (2, 2.5, 3, 4)]
+    assert s["rose"]  # climbed 3 d >= RISE_D
+    rows = [{"dimension": 3, "noise_d": 0.0, "phi": f, "status": "ok", "rose": f > 2.5, "reached_top": f > 3.5}
+            for f in (2, 2.5, 3, 4)]
     assert brazil_nut.threshold(rows, 3, 0.0) == (2.5, 3, False)
-    rows.append({"dimension": 3, "noise_d": 0.0, "phi": 5.0, "status": "ok", "reached_top": False})
+    assert brazil_nut.threshold(rows, 3, 0.0, "reached_top") == (3, 4, False)
+    rows.append({"dimension": 3, "noise_d": 0.0, "phi": 5.0, "status": "ok", "rose": False, "reached_top": False})
     assert brazil_nut.threshold(rows, 3, 0.0)[2]  # not monotonic in Phi: reported as such

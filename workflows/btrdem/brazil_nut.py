@@ -3,10 +3,11 @@
 One intruder of diameter ratio Phi rests on the floor under a bed of equal grains (diameter d) in a
 laterally periodic cell; `btr shake` lifts and redeposits the pile cycle after cycle. For each
 dimension, noise amplitude a (in d) and Phi the study records the intruder's centre height (in d,
-and relative to the bed's mean top) against cycles. An intruder "reaches the top" when its top comes
-within one d of the bed's mean surface; the measured threshold lies between the largest Phi that does
-not and the smallest that does, to compare with Phi_c = (3 + sqrt 2)/(3 - sqrt 2) ~ 2.78 in 3D
-(Jullien-Meakin found ~2.8 with this model) and 12.9 in 2D (Duran's arch model).
+and relative to the bed's mean top) against cycles. An intruder "rises" when its centre climbs at
+least RISE_D = 2 d during the run, and "reaches the top" when its top comes within one d of the bed's
+mean surface; each measured threshold lies between the largest Phi that does not and the smallest that
+does, to compare with Phi_c = (3 + sqrt 2)/(3 - sqrt 2) ~ 2.78 in 3D (Jullien-Meakin found ~2.8 with
+this model) and 12.9 in 2D (Duran's arch model).
 Beds without an intruder give the packing fraction against cycles: does shaking densify a BTR bed?
 
 Outputs: cases/<case>/ (scene, snapshots, NAME_cycles.csv), brazil_nut.csv (one row per case),
@@ -38,6 +39,7 @@ TINY = {
     2: {"size": 24.0, "count": 300, "cycles": 6, "phis": [2.0, 8.0]},
 }
 NOISES = [0.0, 0.1, 0.3]  # amplitude a in d
+RISE_D = 2.0  # climb (in d) over the run that counts as rising
 TINY_NOISES = [0.0, 0.3]
 
 
@@ -76,7 +78,7 @@ def summarise(t: dict, phi: float | None) -> dict:
     z, below = t["intruder_z_d"], t["intruder_below_top_d"]
     reached = np.nonzero(below <= 0.5 * phi + 1.0)[0]
     out.update(z0_d=float(z[0]), z_end_d=float(z[-1]), bed_top_d=float(t["bed_top_d"][-1]),
-               rel_end=float(t["intruder_z_over_bed_top"][-1]),
+               rel_end=float(t["intruder_z_over_bed_top"][-1]), rose=bool(np.max(z) - z[0] >= RISE_D),
                reached_top=bool(len(reached)), cycles_to_top=int(t["cycle"][reached[0]]) if len(reached) else None)
     # Rise speed: up to the first arrival at the top (or over the whole run).
     k = reached[0] if len(reached) else len(z) - 1
@@ -84,12 +86,13 @@ def summarise(t: dict, phi: float | None) -> dict:
     return out
 
 
-def threshold(rows: list, dim: int, noise: float):
-    """(largest Phi not reaching the top, smallest Phi reaching it) among the successful cases."""
+def threshold(rows: list, dim: int, noise: float, key: str = "rose"):
+    """(largest Phi without `key`, smallest Phi with it, not monotonic) among the successful cases;
+    key: "rose" (climbed RISE_D) or "reached_top"."""
     ok = [r for r in rows if r["dimension"] == dim and r["noise_d"] == noise and r["status"] == "ok"
           and r.get("phi") is not None]
-    below = [r["phi"] for r in ok if not r["reached_top"]]
-    above = [r["phi"] for r in ok if r["reached_top"]]
+    below = [r["phi"] for r in ok if not r[key]]
+    above = [r["phi"] for r in ok if r[key]]
     return (max(below) if below else None, min(above) if above else None,
             bool(below and above and max(below) > min(above)))
 
@@ -135,7 +138,7 @@ class Study:
     # ---- outputs, rewritten after every case
     def write_outputs(self):
         keys = ["case", "dimension", "noise_d", "phi", "status", "reason", "cycles", "z0_d", "z_end_d", "bed_top_d",
-                "rel_end", "reached_top", "cycles_to_top", "rise_d_per_cycle", "packing_fraction_0",
+                "rel_end", "rose", "reached_top", "cycles_to_top", "rise_d_per_cycle", "packing_fraction_0",
                 "packing_fraction_end", "seconds_per_cycle"]
         lines = [",".join(keys)]
         for r in self.rows:
@@ -198,20 +201,27 @@ class Study:
             p = self.plan[dim]
             out.append(f"- {dim}D: cell {p['size']:g} d wide (periodic), {p['count']} bed grains, {p['cycles']} "
                        f"cycles per case.")
-        out += ["", "An intruder *reaches the top* when its top comes within 1 d of the bed's mean surface "
-                "(`intruder_below_top_d <= Phi/2 + 1`). Rise speed: centre height gained per cycle up to then.", "",
+        out += ["", f"An intruder *rises* when its centre climbs at least {RISE_D:g} d during the run, and *reaches "
+                "the top* when its top comes within 1 d of the bed's mean surface (`intruder_below_top_d <= Phi/2 + "
+                "1`). Rise speed: centre height gained per cycle up to the top (or over the run).", "",
                 "## Measured threshold", ""]
+
+        def where(lo, hi, mixed):
+            if mixed:
+                return "not monotonic in Phi"
+            if lo is not None and hi is not None:
+                return "between " + report.fmt(lo) + " and " + report.fmt(hi)
+            if lo is not None:
+                return f"> {report.fmt(lo)} (no Phi did)"
+            return f"< {report.fmt(hi)} (every Phi did)" if hi is not None else "n/a"
+
         trows = []
         for dim in self.dims:
             for noise in self.noises:
-                lo, hi, mixed = threshold(self.rows, dim, noise)
-                where = ("between " + report.fmt(lo) + " and " + report.fmt(hi) if lo is not None and hi is not None
-                         and not mixed else
-                         ("not monotonic in Phi" if mixed else
-                          (f"> {report.fmt(lo)} (none reached the top)" if hi is None and lo is not None else
-                           (f"<= {report.fmt(hi)} (all reached the top)" if hi is not None else "n/a"))))
-                trows.append([f"{dim}D", report.fmt(noise), where, report.fmt(PHI_C[dim])])
-        out.append(report.md_table(["dimension", "noise a [d]", "measured Phi threshold", "Phi_c (seed 001)"], trows))
+                trows.append([f"{dim}D", report.fmt(noise), where(*threshold(self.rows, dim, noise, "rose")),
+                              where(*threshold(self.rows, dim, noise, "reached_top")), report.fmt(PHI_C[dim])])
+        out.append(report.md_table(["dimension", "noise a [d]", f"threshold: rises >= {RISE_D:g} d",
+                                    "threshold: reaches the top", "Phi_c (seed 001)"], trows))
         out += ["## Cases", ""]
         crow = []
         for r in self.rows:
@@ -249,7 +259,9 @@ def run_brazil_nut(outdir=None, dims=(3, 2), tiny: bool = False, seed: int = 1, 
                               "seed": seed, "tiny": tiny, "phi_c": {str(k): v for k, v in PHI_C.items()}})
     study = Study(outdir, list(dims), noises, plan, seed, progress)
     study.run(rec)
-    thresholds = {f"{d}D a={a:g}": threshold(study.rows, d, a)[:2] for d in dims for a in noises}
+    thresholds = {f"{d}D a={a:g}": {"rises": threshold(study.rows, d, a, "rose")[:2],
+                                    "reaches_top": threshold(study.rows, d, a, "reached_top")[:2]}
+                  for d in dims for a in noises}
     failed = [r["case"] for r in study.rows if r["status"] != "ok"]
     rec.finish({"thresholds": thresholds, "failed_cases": failed, "report": str(outdir / "report.md")})
     progress(f"brazil-nut: {len(study.rows)} cases ({len(failed)} failed); report {outdir / 'report.md'}")
