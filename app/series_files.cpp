@@ -21,7 +21,7 @@ void SeriesWriter::write(long long step, double time, const btr::Grains& grains,
   btr::write_packing(dir_, file, packing);
   entries_.emplace_back(time, file + ".vtp");
   std::ostringstream x;
-  x.precision(17);
+  x.precision(12);  // times are cycle numbers or angles in degrees
   x << "<?xml version=\"1.0\"?>\n"
     << "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n";
   for (const auto& [t, f] : entries_)

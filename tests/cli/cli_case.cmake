@@ -1,7 +1,7 @@
 # One end-to-end case of the `btr` program, run by ctest:
 #   cmake -DBTR=<program> -DINPUTS=<inputs dir> -DWORK=<scratch dir> -DCASE=<case>
 #         [-DSCENE=<name in inputs/>] [-DCOUNT=<grains>] -P cli_case.cmake
-# Cases: deterministic, check, missing_scene, unknown_key, shake_series, shake_without_table. Fails with message(FATAL_ERROR).
+# Cases: deterministic, check, missing_scene, unknown_key, shake_series, shake_without_table, drum_series. Fails with message(FATAL_ERROR).
 cmake_minimum_required(VERSION 3.18)
 
 # Runs the program; sets <prefix>_code and <prefix>_text (stdout + stderr).
@@ -118,6 +118,52 @@ elseif(CASE STREQUAL "shake_series")
       message(FATAL_ERROR "${SCENE}.pvd does not list ${SCENE}_c${c}.vtp:\n${pvd}")
     endif()
   endforeach()
+
+elseif(CASE STREQUAL "drum_series")
+  # Rotating drum: same scene and seed twice give byte-identical snapshots and step tables (less the
+  # wall-time column); every snapshot passes --check; the .pvd lists the snapshots with their angle.
+  foreach(run a b)
+    run_btr(r drum "${scene}" -o "${WORK}/${run}" --steps 6 --check --quiet)
+    expect_code(r 0)
+  endforeach()
+  file(GLOB snaps RELATIVE "${WORK}/a" "${WORK}/a/${SCENE}_s[0-9]*.csv" "${WORK}/a/${SCENE}_s[0-9]*.vtp")
+  list(LENGTH snaps n_snaps)
+  if(n_snaps LESS 4)
+    message(FATAL_ERROR "expected snapshots at steps 0 and 6 (CSV + VTP), got: ${snaps}")
+  endif()
+  foreach(f ${snaps})
+    execute_process(COMMAND ${CMAKE_COMMAND} -E compare_files "${WORK}/a/${f}" "${WORK}/b/${f}" RESULT_VARIABLE same)
+    if(NOT same EQUAL 0)
+      message(FATAL_ERROR "${f} differs between two runs with the same seed")
+    endif()
+  endforeach()
+  foreach(run a b)
+    file(STRINGS "${WORK}/${run}/${SCENE}_steps.csv" rows)
+    set(stripped_${run} "")
+    foreach(row ${rows})
+      string(REGEX REPLACE "^([^,]*),([^,]*),[^,]*," "\\1,\\2,," row "${row}")
+      list(APPEND stripped_${run} "${row}")
+    endforeach()
+  endforeach()
+  list(LENGTH stripped_a n_rows)
+  if(NOT n_rows EQUAL 8)
+    message(FATAL_ERROR "expected a header and 7 rows (steps 0..6) in ${SCENE}_steps.csv, got ${n_rows} lines")
+  endif()
+  if(NOT "${stripped_a}" STREQUAL "${stripped_b}")
+    message(FATAL_ERROR "the per-step tables differ between two runs with the same seed")
+  endif()
+  file(READ "${WORK}/a/${SCENE}.pvd" pvd)
+  string(FIND "${pvd}" "timestep=\"21.6\" group=\"\" part=\"0\" file=\"${SCENE}_s000006.vtp\"" at)
+  if(at EQUAL -1)
+    message(FATAL_ERROR "${SCENE}.pvd does not list ${SCENE}_s000006.vtp at 21.6 degrees:\n${pvd}")
+  endif()
+  # DEM coupling of a drum snapshot is refused with the reason.
+  run_btr(r relax "${WORK}/a/${SCENE}_s000006.csv" -o "${WORK}/relax")
+  if("${r_code}" STREQUAL "0")
+    message(FATAL_ERROR "btr relax accepted a drum packing:\n${r_text}")
+  endif()
+  expect_mentions(r "container 'drum'")
+  expect_mentions(r "not supported")
 
 elseif(CASE STREQUAL "shake_without_table")
   run_btr(r shake "${scene}" -o "${WORK}/out")
