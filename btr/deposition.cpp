@@ -188,10 +188,13 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
   arc.bounds(lo, hi);
   auto offer_drum = [&](const Obstacle& o) {
     if (active.has(o.key)) return;
-    // The arc's box lies inside the drum's centre surface: no contact possible.
+    // The arc lies inside the drum's centre surface (its box does, or its circle does: the distance of
+    // any point of it from the axis is at most that of C plus rho): no contact possible.
     const double fx = std::max(std::abs(lo.x()), std::abs(hi.x()));
     const double fz = std::max(std::abs(lo.z() - o.c.z()), std::abs(hi.z() - o.c.z()));
     if (fx * fx + fz * fz < o.R * o.R * (1.0 - 1e-9)) return;
+    const double cz = arc.C.z() - o.c.z();
+    if (std::sqrt(arc.C.x() * arc.C.x() + cz * cz) + arc.rho < o.R * (1.0 - 1e-9)) return;
     if (std::abs(arc.u.y()) > 1e-12 || std::abs(arc.v.y()) > 1e-12) {
       offer_cylinder(o);  // squared distance from the axis is of degree 2 in cos t, sin t: sample
       return;

@@ -40,7 +40,10 @@ struct Obstacle {
       case Kind::Sphere: return (x - c).norm() - R;
       case Kind::Plane: return c.dot(x) - R;
       case Kind::Cylinder: return R - std::hypot(x.x(), x.y());
-      case Kind::Drum: return R - std::hypot(x.x(), x.z() - c.z());
+      case Kind::Drum: {
+        const double dz = x.z() - c.z();
+        return R - std::sqrt(x.x() * x.x() + dz * dz);  // no overflow to guard against: sqrt beats hypot
+      }
     }
     return 0.0;
   }
