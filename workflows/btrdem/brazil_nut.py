@@ -161,7 +161,7 @@ class Study:
             ax.set_title(f"{dim}D, noise a = {noise:g} d (Phi_c = {PHI_C[dim]:.3g})", fontsize=9)
             ax.set_xlabel("cycle")
             ax.set_ylabel("intruder height / bed top")
-            ax.set_ylim(0, 1.15)
+            ax.set_ylim(bottom=0)
             if ax.get_legend_handles_labels()[0]:
                 ax.legend(fontsize=7, loc="lower right")
         fig.tight_layout()
