@@ -393,6 +393,11 @@ BulkMeasures bulk_measures(const Grains& grains, int dimension, const Container&
     m.note = "no grains";
     return m;
   }
+  if (container.kind == ContainerKind::Drum) {
+    // A box under the surface would reach below the drum's curved wall, where there are no grains.
+    m.note = "no bulk window in a drum (its floor is the curved wall); see the drum measures of `btr drum`";
+    return m;
+  }
   const double d = 2.0 * max_radius(grains);
   const double margin = options.margin_diameters * d;
   const bool three = dimension == 3;

@@ -63,7 +63,8 @@ double packing_fraction_in_box(const Grains& grains, int dimension, const Box& b
 // lateral bounds are the walls less the margin (cylinder: the inscribed square; Hele-Shaw: the whole gap
 // in y; open floor: the extent of the grains less the margin), and the window is the column-aligned box
 // of largest volume under (column top - margin), so heaps get a box under their slopes.
-// `coordination` (optional): coordination_numbers() already computed with options.contact_tol.
+// Drums get no window (invalid, with a note). `coordination` (optional): coordination_numbers() already
+// computed with options.contact_tol.
 BulkMeasures bulk_measures(const Grains& grains, int dimension, const Container& container,
                            const MetricsOptions& options = {}, const std::vector<int>* coordination = nullptr);
 
