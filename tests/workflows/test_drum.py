@@ -34,9 +34,13 @@ def test_drum_tiny(tmp_path, source_dir, btr_binary):
 def test_summarise_by_hand():
     t = {"step": np.arange(5.0), "seconds": np.array([1.0, 0.2, 0.2, 0.2, 0.2]),
          "segregation_index": np.array([0.0, 0.1, 0.2, 0.3, 0.4]),
-         "surface_angle_deg": np.array([0.0, 10.0, 20.0, 30.0, 40.0])}
+         "surface_angle_deg": np.array([0.0, 10.0, 20.0, 30.0, 40.0]),
+         "core_small_R": np.array([0.5, 0.4, 0.3, 0.3, 0.2]), "core_large_R": np.array([0.5, 0.5, 0.5, 0.6, 0.6])}
     s = drum.summarise(t, 2)  # two steps per revolution: 2 revolutions; the last one is steps 3 and 4
     assert s["revolutions"] == 2.0
     assert s["index_one_rev"] == 0.2 and s["index_end"] == 0.4
     assert math.isclose(s["dynamic_angle_deg"], 35.0)
     assert math.isclose(s["seconds_per_step"], 0.2)
+    # Core index large - small: 0 at fill, 0.2 after one revolution, mean of 0.3 and 0.4 over the last.
+    assert s["core_index_0"] == 0.0 and math.isclose(s["core_index_one_rev"], 0.2)
+    assert math.isclose(s["core_index_end_mean"], 0.35)

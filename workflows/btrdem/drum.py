@@ -5,6 +5,7 @@ Cases (each `btr drum` with --check, so every snapshot passed the self-check):
   poly2d    inputs/drum2d.toml: 2D, constant-mass radii 0.1-1 mm (ratio 10, as the paper, scaled)
   bi2d      the same drum with a bidisperse fill: radii 0.3 and 1 mm, equal area fractions
   poly3d    inputs/drum3d.toml: 3D, flat end walls, constant-mass radii 0.4-1 mm
+  wide3d    (not with --tiny) 3D, 6000 spheres, constant-mass radii 0.2-1 mm, R = 20 mm, length 8 mm
 Each runs `revolutions` revolutions of 100 steps (rotate 3.6 degrees, lift by R/10, redeposit).
 The radial segregation index is (mean distance from the axis of the large grains - that of the small
 grains) / R, small and large split at the median radius: > 0 when the small grains gather inwards.
@@ -36,6 +37,14 @@ def cases(tiny: bool) -> list:
         {"species": 2, "fraction": 0.5, "radius": {"distribution": "constant", "value": 1.0e-3}}]
     bi2d["grains"]["count"] = 1000  # about half the drum (equal areas: ~8 % of the disks are large)
     out = [("poly2d", poly2d), ("bi2d", bi2d), ("poly3d", poly3d)]
+    if not tiny:  # a wider size ratio in 3D: constant-mass radii 0.2-1 mm, 6000 spheres
+        wide3d = read_scene_toml(REPO / "inputs" / "drum3d.toml")
+        wide3d["scene"]["name"] = "wide3d"
+        wide3d["grains"]["count"] = 6000
+        wide3d["grains"]["radius"] = {"distribution": "constant-mass", "min": 0.2e-3, "max": 1.0e-3}
+        wide3d["container"].update(radius=0.02, length=0.008)
+        wide3d["drum"]["lift"] = 0.002
+        out.append(("wide3d", wide3d))
     if tiny:
         for _, sc in out:
             sc["grains"]["count"] = min(sc["grains"]["count"], 300)
@@ -54,9 +63,13 @@ def summarise(t: dict, steps_per_rev: int) -> dict:
     rev = t["step"] / steps_per_rev
     last = rev >= max(rev[-1] - 1.0, 0.0) + 1e-12 if rev[-1] > 1.0 else rev > 0
     angles = t["surface_angle_deg"][last]
+    core = t["core_large_R"] - t["core_small_R"]
+    k1 = min(steps_per_rev, len(rev) - 1)
     return {"revolutions": float(rev[-1]), "index_0": float(t["segregation_index"][0]),
+            "core_index_0": float(core[0]), "core_index_one_rev": float(core[k1]),
+            "core_index_end_mean": float(np.mean(core[last])),
             "index_end": float(t["segregation_index"][-1]),
-            "index_one_rev": float(t["segregation_index"][min(steps_per_rev, len(rev) - 1)]),
+            "index_one_rev": float(t["segregation_index"][k1]),
             "dynamic_angle_deg": float(np.nanmean(angles)) if np.any(np.isfinite(angles)) else float("nan"),
             "dynamic_angle_std": float(np.nanstd(angles)) if np.any(np.isfinite(angles)) else float("nan"),
             "seconds_per_step": float(np.mean(t["seconds"][1:])) if len(rev) > 1 else float("nan")}
@@ -97,7 +110,7 @@ class Study:
 
     def write_outputs(self):
         keys = ["case", "dimension", "grains", "status", "reason", "revolutions", "index_0", "index_one_rev",
-                "index_end", "dynamic_angle_deg", "dynamic_angle_std", "seconds_per_step"]
+                "index_end", "core_index_0", "core_index_one_rev", "core_index_end_mean", "dynamic_angle_deg", "dynamic_angle_std", "seconds_per_step"]
         lines = [",".join(keys)] + [",".join("" if r.get(k) is None else str(r.get(k)).replace(",", ";")
                                              for k in keys) for r in self.rows]
         atomic_write_text(self.out / "drum.csv", "\n".join(lines) + "\n")
@@ -144,14 +157,19 @@ class Study:
                "snapshot passed the self-check.", "",
                "Segregation index: (mean distance from the axis of the large grains - that of the small grains) / "
                "R, with small and large split at the median radius; positive when the small grains gather "
-               "towards the centre. Dynamic angle: slope of the free surface over |x| <= 0.6 R, mean (and "
+               "towards the centre. Core index: the same with distances from the centre of mass of the fill "
+               "(the last column: its mean over the last revolution, as the axis index swings while the pile "
+               "rotates). Dynamic angle: slope of the free surface over |x| <= 0.6 R, mean (and "
                "standard deviation) over the last revolution.", ""]
         rows = [[r["case"], f"{r['dimension']}D", r["grains"], r["status"], report.fmt(r.get("index_0")),
                  report.fmt(r.get("index_one_rev")), report.fmt(r.get("index_end")),
-                 report.fmt(r.get("dynamic_angle_deg")), report.fmt(r.get("dynamic_angle_std")),
+                 report.fmt(r.get("core_index_0")), report.fmt(r.get("core_index_one_rev")),
+                 report.fmt(r.get("core_index_end_mean")), report.fmt(r.get("dynamic_angle_deg")), report.fmt(r.get("dynamic_angle_std")),
                  report.fmt(r.get("seconds_per_step")), r["reason"] or ""] for r in self.rows]
         out.append(report.md_table(["case", "dim", "grains", "status", "index at fill", "index after 1 rev",
-                                    f"index after {self.revolutions:g} rev", "dynamic angle [deg]", "std [deg]",
+                                    f"index after {self.revolutions:g} rev", "core index at fill",
+                                    "core index after 1 rev", "core index, last rev (mean)", "dynamic angle [deg]",
+                                    "std [deg]",
                                     "s per step", "reason"], rows))
         out += ["![segregation](segregation.png)", "", "![angle](surface_angle.png)", "",
                 "![snapshots](snapshots.png)", ""]
