@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <random>
 #include <fstream>
 #include <unistd.h>
 
@@ -234,6 +235,49 @@ TEST(SurfaceHeight, SquareLayerTopIsItsGrainTops) {
       for (int k = 0; k < 2; ++k) g.push_back({Vec3(-3.0 + 2 * i, -3.0 + 2 * j, 1.0 + 2 * k), 1.0, 1});
   EXPECT_NEAR(mean_surface_height(g, 3, c, 2.0), 4.0, 1e-12);
   EXPECT_EQ(mean_surface_height({}, 3, c, 2.0), 0.0);
+}
+
+}  // namespace
+}  // namespace btr
+
+namespace btr {
+namespace {
+
+// Shaking with noise in every container the issue names (and 2D): each cycle's packing passes the
+// self-check, and the intruder (Phi = 3) is still grain 1 with its radius.
+TEST(ShakerContainers, EveryContainerStaysValid) {
+  struct Kind { int dim; ContainerKind kind; };
+  for (const Kind k : {Kind{3, ContainerKind::Box}, Kind{3, ContainerKind::Periodic}, Kind{3, ContainerKind::HeleShaw},
+                       Kind{3, ContainerKind::Cylinder}, Kind{2, ContainerKind::Box}, Kind{2, ContainerKind::Periodic}}) {
+    SCOPED_TRACE(std::string(to_string(k.kind)) + " " + std::to_string(k.dim) + "D");
+    Container c;
+    c.kind = k.kind;
+    c.size_x = k.dim == 3 ? 12.0 : 30.0;
+    c.size_y = k.dim == 3 ? 12.0 : 0.0;
+    c.gap = 3.0;
+    c.radius = 6.0;
+    const double r_in = k.kind == ContainerKind::HeleShaw ? 1.4 : 3.0;
+    Deposition dep(k.dim, c, r_in);
+    dep.place(Drop{0.0, 0.0, r_in, 2});
+    std::mt19937_64 rng(5);
+    auto u = [&] { return static_cast<double>(rng() >> 11) * 0x1.0p-53; };
+    for (int i = 0; i < 250; ++i) {
+      double x = (u() - 0.5) * (c.size_x - 2.0), y = 0.0;
+      if (k.dim == 3) y = (u() - 0.5) * ((k.kind == ContainerKind::HeleShaw ? c.gap : c.size_y) - 2.0);
+      if (k.kind == ContainerKind::Cylinder) x *= 0.6, y *= 0.6;
+      dep.place(Drop{x, y, 1.0, 1});
+    }
+    Grains g = dep.grains();
+    Shaker sh(k.dim, c, 2.0 * r_in, 0.4, 11);
+    for (int cycle = 0; cycle < 4; ++cycle) {
+      g = sh.cycle(g);
+      const CheckReport rep = check_packing(g, k.dim, c);
+      ASSERT_TRUE(rep.ok()) << "cycle " << cycle << ": " << rep.overlaps << " overlaps, " << rep.unsupported
+                            << " unsupported, " << rep.outside << " outside";
+      ASSERT_EQ(g[0].r, r_in);
+      ASSERT_EQ(g[0].species, 2);
+    }
+  }
 }
 
 }  // namespace
