@@ -5,6 +5,7 @@
 // is written, OUTDIR/NAME.pvd indexes them, and OUTDIR/NAME_steps.csv has one row per step.
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -32,10 +33,14 @@ struct Options {
   bool check = false, quiet = false;
 };
 
-std::string row_text(std::int64_t step, double angle_deg, double seconds, const btr::DrumMeasures& m, double R) {
+// Processor time of this process [s] (std::clock): the step's own cost when other jobs share the cores.
+double cpu_now() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
+
+std::string row_text(std::int64_t step, double angle_deg, double seconds, double cpu, const btr::DrumMeasures& m,
+                     double R) {
   char buf[400];
-  std::snprintf(buf, sizeof buf, "%lld,%.10g,%.6f,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g\n",
-                static_cast<long long>(step), angle_deg, seconds, m.segregation_index, m.axis_small / R,
+  std::snprintf(buf, sizeof buf, "%lld,%.10g,%.6f,%.6f,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g\n",
+                static_cast<long long>(step), angle_deg, seconds, cpu, m.segregation_index, m.axis_small / R,
                 m.axis_large / R, m.core_small / R, m.core_large / R, m.com_x / R, m.com_z / R,
                 m.surface_valid ? m.surface_angle_deg : NAN);
   return buf;
@@ -68,21 +73,22 @@ int run(const Options& o, const CLI::App& cmd) {
   const json scene_json = btr::scene_to_json(scene);
   SeriesWriter series(o.out, name, "step");
   std::string table =
-      "step,angle_deg,seconds,segregation_index,axis_small_R,axis_large_R,core_small_R,core_large_R,com_x_R,com_z_R,"
+      "step,angle_deg,seconds,cpu_seconds,segregation_index,axis_small_R,axis_large_R,core_small_R,core_large_R,com_x_R,com_z_R,"
       "surface_angle_deg\n";
   bool all_ok = true;
   btr::Grains grains;
   double fill_seconds = 0.0, step_seconds = 0.0;
   try {
     auto t0 = std::chrono::steady_clock::now();
+    double c0 = cpu_now();
     ProgressBar bar(scene.name, o.quiet);
     grains = btr::run_scene(scene, seed, scene.grains.count, {}).grains;
     fill_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     btr::DrumStepper stepper(scene.dimension, scene.container, dr.lift);
-    double seconds = fill_seconds;
+    double seconds = fill_seconds, cpu = cpu_now() - c0;
     for (std::int64_t s = 0;; ++s) {
       const double angle_deg = 360.0 * static_cast<double>(s) / static_cast<double>(dr.steps_per_revolution);
-      table += row_text(s, angle_deg, seconds, btr::drum_measures(grains, scene.dimension, scene.container), R);
+      table += row_text(s, angle_deg, seconds, cpu, btr::drum_measures(grains, scene.dimension, scene.container), R);
       if (s % dr.snapshot_every == 0 || s == steps) {
         json meta = {{"program", "btr"}, {"version", BTR_VERSION}, {"command", "drum"},
                      {"scene_name", scene.name}, {"scene_file", scene.file}, {"scene", scene_json},
@@ -104,8 +110,10 @@ int run(const Options& o, const CLI::App& cmd) {
       if (s == steps) break;
       bar.update(s, steps);
       const auto t = std::chrono::steady_clock::now();
+      c0 = cpu_now();
       grains = stepper.step(grains, dphi);
       seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+      cpu = cpu_now() - c0;
       step_seconds += seconds;
     }
   } catch (const btr::SceneError& e) {
@@ -141,7 +149,7 @@ Runner add_drum_command(CLI::App& app) {
       "per step rotate every grain with the drum by 360/steps_per_revolution degrees, lift it by [drum].lift\n"
       "and redeposit all grains lowest first with the BTR engine. Writes OUTDIR/NAME_sNNNNNN.{csv,json,vtp}\n"
       "every snapshot_every steps, OUTDIR/NAME.pvd (ParaView collection) and OUTDIR/NAME_steps.csv (step,\n"
-      "angle_deg, seconds, segregation_index, axis_small_R, axis_large_R, core_small_R, core_large_R, com_x_R,\n"
+      "angle_deg, seconds, cpu_seconds, segregation_index, axis_small_R, axis_large_R, core_small_R, core_large_R, com_x_R,\n"
       "com_z_R, surface_angle_deg; distances in drum radii, small/large split at the median radius).\n"
       "Exit codes: 0 ok, 2 bad input, 3 internal failure (placement or I/O), 4 --check failed.");
   cmd->add_option("scene", o->scene, "scene file (TOML) with a drum container and a [drum] table")

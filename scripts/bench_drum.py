@@ -3,9 +3,10 @@
 
 A 3D drum with flat end walls (length = radius), monodisperse-ish spheres (constant-mass radii
 0.8-1 mm), filled to ~40 % of its volume; the radius grows with N so the fill stays the same. Each N
-runs `btr drum --steps S` in a fresh process; the table gives the fill time, the mean wall time per
-step (every grain redeposited), grains placed per second, and the projected time of one revolution
-of 100 steps. Then the least-squares exponent b of time per step ~ N^b.
+runs `btr drum --steps S` in a fresh process; the table gives the fill time, the mean wall and CPU
+(process time, std::clock) time per step (every grain redeposited), grains placed per wall second,
+and the projected wall and CPU time of one revolution of 100 steps. Then the least-squares exponent
+b of CPU time per step ~ N^b.
     scripts/bench_drum.py [--sizes 1000,10000,100000] [--steps 3] [--dimension 3]"""
 import argparse
 import csv
@@ -45,7 +46,8 @@ def main():
     ap.add_argument("--btr", default=os.environ.get("BTR_BINARY", str(REPO / "build" / "app" / "btr")))
     args = ap.parse_args()
     sizes = [int(float(s)) for s in args.sizes.split(",") if s]
-    print(f"{'N':>9} {'fill s':>8} {'s/step':>9} {'grains/s':>10} {'1 rev (100 steps) s':>20}")
+    print(f"{'N':>9} {'fill s':>8} {'s/step':>9} {'cpu s/step':>10} {'grains/s':>10} {'1 rev wall s':>12} "
+          f"{'1 rev cpu s':>11}")
     xs, ys = [], []
     with tempfile.TemporaryDirectory() as tmp:
         for n in sizes:
@@ -61,13 +63,15 @@ def main():
             rows = list(csv.DictReader(open(out / "bench_steps.csv")))
             fill = float(rows[0]["seconds"])
             per_step = sum(float(r["seconds"]) for r in rows[1:]) / (len(rows) - 1)
-            print(f"{n:>9} {fill:>8.3f} {per_step:>9.4f} {n / per_step:>10.0f} {100 * per_step:>20.1f}", flush=True)
+            cpu_step = sum(float(r["cpu_seconds"]) for r in rows[1:]) / (len(rows) - 1)
+            print(f"{n:>9} {fill:>8.3f} {per_step:>9.4f} {cpu_step:>10.4f} {n / per_step:>10.0f} "
+                  f"{100 * per_step:>12.1f} {100 * cpu_step:>11.1f}", flush=True)
             xs.append(math.log(n))
-            ys.append(math.log(per_step))
+            ys.append(math.log(cpu_step))
     if len(xs) >= 2:
         mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
         b = sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs)
-        print(f"\nleast-squares exponent b of time per step ~ N^b: {b:.2f}")
+        print(f"\nleast-squares exponent b of CPU time per step ~ N^b: {b:.2f}")
 
 
 if __name__ == "__main__":
