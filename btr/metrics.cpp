@@ -285,6 +285,33 @@ HeightMap height_map(const Grains& grains, int dimension, double x0, double x1, 
   return h;
 }
 
+}  // namespace
+
+double mean_surface_height(const Grains& grains, int dimension, const Container& container, double width) {
+  if (grains.empty()) return 0.0;
+  double x0, x1, y0 = 0.0, y1 = 0.0;
+  switch (container.kind) {
+    case ContainerKind::Box:
+    case ContainerKind::Periodic:
+      x1 = 0.5 * container.size_x, y1 = 0.5 * container.size_y;
+      break;
+    case ContainerKind::HeleShaw: x1 = 0.5 * container.size_x, y1 = 0.5 * container.gap; break;
+    case ContainerKind::Cylinder: x1 = y1 = container.radius / std::sqrt(2.0); break;
+    default:
+      x1 = y1 = 0.0;
+      for (const Grain& g : grains) x1 = std::max(x1, std::abs(g.x.x())), y1 = std::max(y1, std::abs(g.x.y()));
+  }
+  x0 = -x1, y0 = -y1;
+  const HeightMap h = height_map(grains, dimension, x0, x1, y0, y1, width, 1 << 20);
+  double sum = 0.0;
+  int n = 0;
+  for (double t : h.top)
+    if (t > 0.0) sum += t, ++n;
+  return n ? sum / n : 0.0;
+}
+
+namespace {
+
 struct Span {
   double extent = 0.0, height = 0.0;  // (edge[last + 1] - edge[first]) and the least height over it
   int first = 0, last = -1;
@@ -388,6 +415,11 @@ BulkMeasures bulk_measures(const Grains& grains, int dimension, const Container&
   BulkMeasures m;
   if (grains.empty()) {
     m.note = "no grains";
+    return m;
+  }
+  if (container.kind == ContainerKind::Drum) {
+    // A box under the surface would reach below the drum's curved wall, where there are no grains.
+    m.note = "no bulk window in a drum (its floor is the curved wall); see the drum measures of `btr drum`";
     return m;
   }
   const double d = 2.0 * max_radius(grains);

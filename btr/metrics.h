@@ -94,7 +94,8 @@ double packing_fraction_in_box(const Grains& grains, int dimension, const Box& b
 // lateral bounds are the walls less the margin (cylinder: the inscribed square; Hele-Shaw: the whole gap
 // in y; open floor: the extent of the grains less the margin), and the window is the column-aligned box
 // of largest volume under (column top - margin), so heaps get a box under their slopes.
-// `coordination` (optional): coordination_numbers() already computed with options.contact_tol.
+// Drums get no window (invalid, with a note). `coordination` (optional): coordination_numbers() already
+// computed with options.contact_tol.
 BulkMeasures bulk_measures(const Grains& grains, int dimension, const Container& container,
                            const MetricsOptions& options = {}, const std::vector<int>* coordination = nullptr);
 
@@ -152,5 +153,10 @@ struct PackingMeasures {
 PackingMeasures measure_packing(const Grains& grains, int dimension, const Container& container,
                                 const MetricsOptions& options, bool heap_source, double source_x = 0.0,
                                 double source_y = 0.0);
+
+// Mean height of the free surface: the container's footprint (cylinder: its inscribed square; open
+// floor: the grains' extent) cut into columns `width` wide, each with the highest grain top among the
+// grains centred in it; the mean over the columns that hold a grain. 0 without grains.
+double mean_surface_height(const Grains& grains, int dimension, const Container& container, double width);
 
 }  // namespace btr

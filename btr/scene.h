@@ -62,6 +62,31 @@ struct RelaxSpec {
   std::optional<double> timestep;   // requested step; refused if above the stable one
 };
 
+// A single larger grain dropped first, so it sits on the floor under the bed (Brazil nut).
+struct IntruderSpec {
+  double diameter_ratio = 1.0;  // intruder diameter / small-grain diameter (Phi)
+  double x = 0.0, y = 0.0;      // drop position (y = 0 in 2D)
+  int species = 2;              // one more than the bed's species
+};
+
+// Dynamic BTR by shaking (seed 001 section 6.6): per cycle, number the grains by height, lift the
+// pile, redeposit them in that order; noise: a uniform horizontal displacement in [-a, a] per axis.
+struct ShakingSpec {
+  std::int64_t cycles = 0;
+  double lift = 0.0;                // m
+  double noise = 0.0;               // amplitude a [m]; 0 = the deterministic model
+  std::int64_t snapshot_every = 0;  // cycles between snapshots (the initial and last are always written)
+};
+
+// Dynamic BTR in a rotating drum (seed 000 section 6): per step, rotate every grain with the drum by
+// 2 pi / steps_per_revolution about its axis, lift every grain by `lift`, redeposit them lowest first.
+struct DrumSpec {
+  std::int64_t steps_per_revolution = 100;
+  double revolutions = 1.0;
+  double lift = 0.0;                // m; default radius / 10
+  std::int64_t snapshot_every = 0;  // steps between snapshots (the initial and last are always written)
+};
+
 struct Scene {
   std::string name;
   std::string file;  // path it was read from
@@ -71,6 +96,9 @@ struct Scene {
   Container container;
   SourceSpec source;
   RelaxSpec relax;
+  std::optional<IntruderSpec> intruder;
+  std::optional<ShakingSpec> shaking;
+  std::optional<DrumSpec> drum;
 };
 
 }  // namespace btr

@@ -77,6 +77,11 @@ Box make_box(const Grains& grains, int dimension, const Container& c) {
       set(0, -c.radius, c.radius);
       set(1, -c.radius, c.radius);
       break;
+    case ContainerKind::Drum:  // refused by dem_walls() before any script is written
+      bx = "f", by = "f";
+      set(0, -c.radius, c.radius);
+      set(1, -0.5 * c.size_y, 0.5 * c.size_y);
+      break;
   }
   if (dimension == 2) {  // one layer of spheres in y = 0: a fixed slab one largest diameter thick
     by = "f";

@@ -6,6 +6,8 @@
   pipeline [SCENE] [-o OUTDIR]            BTR -> DEM relaxation -> comparison -> report (default inputs/bed3d.toml)
   error-vs-runtime SCENE [-o OUTDIR]      error of BTR, BTR + relaxation and DEM pours against a pour reference
   stability [-o OUTDIR] [--tiny]          relaxation stability sweep in each engine
+  brazil-nut [-o OUTDIR] [--tiny]         intruder rise under dynamic BTR shaking, Phi sweep, 3D and 2D
+  drum [-o OUTDIR] [--revolutions N]      segregation and dynamic angle in a rotating drum (2D, 3D)
 
 The `btr` program is $BTR_BINARY, else build/app/btr. Exit status: 0 done, 2 bad input, 3 a step failed
 (its error is printed and recorded in OUTDIR/run.json; what earlier steps wrote is kept)."""
@@ -95,6 +97,17 @@ def main(argv=None) -> int:
     s.add_argument("--max-steps", type=int)
     s.add_argument("--np", type=int, default=1)
 
+    bn = sub.add_parser("brazil-nut", help="Brazil-nut effect under dynamic BTR shaking (btr shake)")
+    bn.add_argument("-o", "--out", help="output folder (default out/brazil_nut)")
+    bn.add_argument("--dims", default="3,2", help="dimensions, comma-separated (default 3,2)")
+    bn.add_argument("--tiny", action="store_true", help="two Phi and two noise values, a few hundred grains, 6 cycles")
+    bn.add_argument("--seed", type=int, default=1)
+
+    dr = sub.add_parser("drum", help="rotating drum under dynamic BTR (btr drum): segregation, dynamic angle")
+    dr.add_argument("-o", "--out", help="output folder (default out/drum)")
+    dr.add_argument("--revolutions", type=float, default=3.0)
+    dr.add_argument("--tiny", action="store_true", help="300 grains, 20 steps per revolution, one revolution")
+
     args = ap.parse_args(argv)
     try:
         if args.command == "compare":
@@ -136,6 +149,17 @@ def main(argv=None) -> int:
             if bad:
                 raise InputError(f"--engines: expected liggghts and/or yade, got {', '.join(bad)}")
             run_stability(args.out, engines, args.scene, args.tiny, args.max_steps, args.np, progress)
+        elif args.command == "brazil-nut":
+            from btrdem.brazil_nut import run_brazil_nut
+            dims = [x for x in args.dims.split(",") if x]
+            if not dims or any(x not in ("2", "3") for x in dims):
+                raise InputError(f"--dims: expected 3 and/or 2, comma-separated, got {args.dims!r}")
+            run_brazil_nut(args.out, tuple(int(x) for x in dims), args.tiny, args.seed, progress)
+        elif args.command == "drum":
+            from btrdem.drum import run_drum
+            if not args.revolutions > 0:
+                raise InputError(f"--revolutions: expected a positive number, got {args.revolutions}")
+            run_drum(args.out, args.revolutions, args.tiny, progress)
     except InputError as e:
         print(f"btr_workflow.py {args.command}: {e}", file=sys.stderr)
         return 2

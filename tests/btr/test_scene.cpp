@@ -105,7 +105,7 @@ TEST(SceneInputs, EveryShippedSceneLoads) {
     EXPECT_EQ(s.name, entry.path().stem().string());
     EXPECT_GT(s.grains.count, 0);
     DropSequence drops(s, s.seed);
-    EXPECT_EQ(drops.count(), s.grains.count);
+    EXPECT_EQ(drops.count(), s.grains.count + (s.intruder ? 1 : 0));
     const Drop d = drops.next();
     EXPECT_GE(d.r, drops.r_min());
     EXPECT_LE(d.r, drops.r_max());
@@ -138,7 +138,7 @@ TEST(SceneInputs, MixtureAndListScenesAreReadAsWritten) {
 TEST_F(SceneFile, UnknownKeyNamesFileLineAndAllowedKeys) {
   const std::string text = replace(kBase, "size = [0.02, 0.02]", "sise = [0.02, 0.02]");
   EXPECT_EQ(error_of(text),
-            at(text, "sise") + "unknown key 'sise' in [container]; allowed: kind, size, gap, radius, height");
+            at(text, "sise") + "unknown key 'sise' in [container]; allowed: kind, size, gap, radius, height, length");
 }
 
 TEST_F(SceneFile, UnknownKeyInsideAnInlineTable) {

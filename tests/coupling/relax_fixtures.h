@@ -83,6 +83,7 @@ inline bool fits(const btr::Scene& s, const btr::Vec3& x, double r) {
       return std::abs(x.x()) <= c.size_x / 2 - r && (s.dimension == 2 || std::abs(x.y()) <= c.size_y / 2 - r);
     case btr::ContainerKind::HeleShaw: return std::abs(x.x()) <= c.size_x / 2 - r && std::abs(x.y()) <= c.gap / 2 - r;
     case btr::ContainerKind::Cylinder: return std::hypot(x.x(), x.y()) <= c.radius - r;
+    case btr::ContainerKind::Drum: return false;  // the DEM coupling refuses drums
   }
   return false;
 }
