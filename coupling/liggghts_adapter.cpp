@@ -44,8 +44,8 @@ class LiggghtsAdapter : public EngineAdapter {
   }
 
   RelaxResult read_back(const std::string& dir, const Packing& original, const Scene& scene,
-                        const RelaxPlan&) const override {
-    return read_liggghts_result(dir, original, scene);
+                        const RelaxPlan& plan) const override {
+    return read_liggghts_result(dir, original, scene, plan);
   }
 };
 

@@ -36,6 +36,11 @@ struct LiggghtsSchedule {
 };
 LiggghtsSchedule liggghts_schedule(const Grains& grains, const Scene& scene, const RelaxPlan& plan);
 
+// fix viscous coefficients (per species, in the scene's order) equivalent to YADE's NewtonIntegrator damping
+// `damping`: equal energy lost per oscillation of a mean grain on a contact under its weight,
+// gamma = 2 (damping / pi) sqrt(k m).
+std::vector<double> liggghts_damping_gamma(const Grains& grains, const Scene& scene, double damping);
+
 // Writes dir/btr.data and dir/in.btr; returns their paths.
 std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Scene& scene, const RelaxPlan& plan,
                                                const std::string& dir);
