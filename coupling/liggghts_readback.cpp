@@ -110,6 +110,7 @@ LiggghtsLog parse_liggghts_log(const std::string& path) {
       log.stop_reason = w.size() > 1 ? w[1] : "";
       for (std::size_t i = 0; i + 2 < w.size(); ++i)
         if (w[i] == "t" && w[i + 1] == "=") to_double(w[i + 2], log.stop_time);
+        else if (w[i] == "value" && w[i + 1] == "=") to_double(w[i + 2], log.stop_value);
       continue;
     }
     if ((line.rfind("BTR-FAILURE", 0) == 0 || line.find("ERROR") != std::string::npos) && log.failure.empty()) {
@@ -151,6 +152,7 @@ RelaxResult read_liggghts_result(const std::string& dir, const Packing& original
   res.simulated_time = log.stop_time;
   res.kinetic_history = log.kinetic;
   res.final_unbalanced_force = log.final_unbalanced_force;
+  res.stop_value = log.stop_value;
 
   const std::size_t n = original.grains.size();
   const std::string final_path = (fs::path(dir) / kLiggghtsFinalDump).string();

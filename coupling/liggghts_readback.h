@@ -14,6 +14,7 @@ struct LiggghtsLog {
   std::vector<std::pair<double, double>> kinetic;  // (time, kinetic energy), one row per thermo output
   std::string stop_reason;                         // the rule that fired, "max-time", or "" (none printed)
   double stop_time = 0.0;
+  double stop_value = std::numeric_limits<double>::quiet_NaN();  // "value = V" of the BTR-STOP line
   double final_unbalanced_force = std::numeric_limits<double>::quiet_NaN();  // BTR-FINAL line
   std::string failure;                             // first ERROR / BTR-FAILURE line, or a non-finite value
 };

@@ -329,6 +329,7 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
                                                                 : plan.displacement_threshold},
       {"final_unbalanced_force", std::isfinite(res.final_unbalanced_force) ? nlohmann::json(res.final_unbalanced_force)
                                                                            : nlohmann::json(nullptr)},
+      {"stop_value", std::isfinite(res.stop_value) ? nlohmann::json(res.stop_value) : nlohmann::json(nullptr)},
       {"damping", plan.damping},
   });
   if (plan.has_region) {

@@ -36,6 +36,8 @@ struct RelaxResult {
   std::vector<std::int64_t> removed;
   // Reported by the engine at the end of the run (NaN if it did not): the unbalanced-force ratio.
   double final_unbalanced_force = std::numeric_limits<double>::quiet_NaN();
+  // The stop rule's measure at the check that fired it (J, ratio or m; NaN for max-time).
+  double stop_value = std::numeric_limits<double>::quiet_NaN();
 };
 
 // An engine that failed (non-zero exit, lost atoms, NaN, blow-up, grains outside the container):

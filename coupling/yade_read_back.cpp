@@ -122,6 +122,8 @@ RelaxResult yade_read_back(const std::string& dir, const Packing& original, cons
       result.removed.push_back(id);
     }
   }
+  if (reason != "max-time" && st.contains("stop_value") && st["stop_value"].is_number())
+    result.stop_value = st["stop_value"].get<double>();
   if (st.contains("final_unbalanced_force") && st["final_unbalanced_force"].is_number())
     result.final_unbalanced_force = st["final_unbalanced_force"].get<double>();
 
@@ -179,7 +181,6 @@ RelaxResult yade_read_back(const std::string& dir, const Packing& original, cons
       {"engine", "yade"},
       {"model", scene.relax.model},
       {"stop_reason", reason},
-      {"stop_value", st.contains("stop_value") ? st["stop_value"] : nlohmann::json(nullptr)},
       {"simulated_time", result.simulated_time},
       {"steps", st.value("steps", 0)},
       {"timestep", plan.timestep},

@@ -371,8 +371,10 @@ class StopRule:
         if removed:
             log("t = %.6g s: %d grain(s) left the open floor's region and were removed (%d in all)" % (
                 t, removed, len(_removed)))
-        if len(O.bodies) != self.bodies - len(_removed):
-            raise RunFailure("bodies were lost: %d left of %d (%d removed)" % (len(O.bodies), self.bodies, len(_removed)))
+        # len(O.bodies) keeps counting erased slots: count the bodies themselves once grains were removed.
+        present = len(O.bodies) if not _removed else sum(1 for b in O.bodies if b is not None)
+        if present != self.bodies - len(_removed):
+            raise RunFailure("bodies were lost: %d left of %d (%d removed)" % (present, self.bodies, len(_removed)))
         if mean >= KINETIC_THRESHOLD:
             self.armed = True
         ready = self.armed or t >= ARMING_TIME if STOP_RULE == "kinetic-energy" else t >= ARMING_TIME
