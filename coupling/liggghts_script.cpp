@@ -19,8 +19,12 @@ namespace btr {
 
 namespace {
 
-constexpr long kChecksOverMaxTime = 500;  // thermo samples / stop checks over max_time
-constexpr long kAveragedSamples = 100;    // samples in each averaging window
+constexpr long kChecksOverMaxTime = 500;  // at most this many stop checks over max_time
+constexpr long kAveragedSamples = 20;     // kinetic-energy samples in each check window (its mean)
+// Each check ends a `run` chunk; a check window is at least this many steps. Short chunks and frequent
+// samples (every sample is an MPI_Allreduce, a synchronisation of all ranks) made 2 MPI ranks slower
+// than 1 (coupling/README.md, "MPI").
+constexpr long kMinStepsPerCheck = 1000;
 
 std::string g17(double v) {
   char buf[40];
@@ -206,10 +210,12 @@ std::string liggghts_wall_id(const std::string& wall_name) {
 
 LiggghtsSchedule liggghts_schedule(const Grains& grains, const Scene& scene, const RelaxPlan& plan) {
   LiggghtsSchedule s;
-  const double total = std::ceil(plan.max_time / plan.timestep);
-  s.average_every = std::max(1L, static_cast<long>(std::ceil(total / double(kChecksOverMaxTime * kAveragedSamples))));
-  s.steps_per_check = s.average_every * kAveragedSamples;
-  s.max_checks = std::max(1L, static_cast<long>(std::ceil(total / double(s.steps_per_check))));
+  const long total = std::max(1L, static_cast<long>(std::ceil(plan.max_time / plan.timestep)));
+  long window = std::max(kMinStepsPerCheck, (total + kChecksOverMaxTime - 1) / kChecksOverMaxTime);
+  window = (window + kAveragedSamples - 1) / kAveragedSamples * kAveragedSamples;
+  s.steps_per_check = window;
+  s.average_every = window / kAveragedSamples;
+  s.max_checks = std::max(1L, (total + window - 1) / window);
   s.arming_time = stop_arming_time(grains);
   s.blowup_bound = kinetic_energy_bound(grains, scene);
   return s;
