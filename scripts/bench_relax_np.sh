@@ -12,6 +12,8 @@ reps=${3:-3}
 btr=${4:-build/app/btr}
 out=$(mktemp -d)
 wall() { sed -n 's/.*"wall_seconds": *\([0-9.eE+-]*\).*/\1/p' "$1/relaxed.json" | head -1; }
+# Stepping time alone: the sum of LIGGGHTS' "Loop time" lines over the steps run, in ms per step.
+per_step() { awk '/^Loop time of/ {t += $4; n += $9} END {printf "%.3f", 1000 * t / n}' "$1/log.liggghts"; }
 echo "packing $packing, max_time $max_time s, $reps pairs, load average: $(cut -d' ' -f1-3 /proc/loadavg)"
 i=1
 while [ "$i" -le "$reps" ]; do
@@ -20,7 +22,10 @@ while [ "$i" -le "$reps" ]; do
   done
   t1=$(wall "$out/np1")
   t2=$(wall "$out/np2")
-  echo "pair $i: np1 $t1 s, np2 $t2 s, ratio np1/np2 $(echo "scale=3; $t1 / $t2" | bc)"
+  s1=$(per_step "$out/np1")
+  s2=$(per_step "$out/np2")
+  echo "pair $i: np1 $t1 s ($s1 ms/step), np2 $t2 s ($s2 ms/step), ratio np1/np2 $(echo "scale=3; $t1 / $t2" | bc)," \
+       "per step $(echo "scale=3; $s1 / $s2" | bc)"
   i=$((i + 1))
 done
 grep "stopped by" "$out/np1.txt" "$out/np2.txt" | sed "s|$out/||"
