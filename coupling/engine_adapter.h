@@ -27,6 +27,13 @@ struct RelaxPlan {
   double region_lo[2] = {0.0, 0.0}, region_hi[2] = {0.0, 0.0};
 };
 
+// The threshold of the plan's stop rule: J (kinetic-energy), a ratio (unbalanced-force) or m (displacement).
+inline double stop_threshold(const RelaxPlan& plan) {
+  if (plan.stop_rule == "kinetic-energy") return plan.kinetic_threshold;
+  if (plan.stop_rule == "unbalanced-force") return plan.unbalanced_threshold;
+  return plan.displacement_threshold;
+}
+
 struct EngineCommand {
   std::vector<std::string> argv;            // argv[0] is looked up on PATH
   std::map<std::string, std::string> env;   // added to the environment

@@ -410,10 +410,7 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
     condition = "${btr_time} >= ${btr_tarm} && ${btr_dmax} < ${btr_threshold}";
     value = "${btr_dmax}";
   }
-  const double threshold = plan.stop_rule == "kinetic-energy"     ? plan.kinetic_threshold
-                           : plan.stop_rule == "unbalanced-force" ? plan.unbalanced_threshold
-                                                                  : plan.displacement_threshold;
-  s << "variable btr_threshold equal " << g17(threshold) << "\n"
+  s << "variable btr_threshold equal " << g17(stop_threshold(plan)) << "\n"
     << "variable btr_kinetic equal " << g17(plan.kinetic_threshold) << "\n"
     << "variable btr_bound equal " << g17(sched.blowup_bound) << "\n"
     << "variable btr_tarm equal " << g17(sched.arming_time) << "\n"

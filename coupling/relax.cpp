@@ -171,9 +171,7 @@ std::vector<std::string> write_engine_inputs(const Packing& packing, const Scene
   std::cout << "time step " << g6(plan.timestep) << " s: " << plan.timestep_rule << "\n"
             << "largest initial overlap: " << g6(plan.largest_overlap) << " of the smaller radius\n"
             << "stop rule: " << plan.stop_rule << " (threshold "
-            << g6(plan.stop_rule == "kinetic-energy"     ? plan.kinetic_threshold
-                  : plan.stop_rule == "unbalanced-force" ? plan.unbalanced_threshold
-                                                         : plan.displacement_threshold)
+            << g6(stop_threshold(plan))
             << (plan.stop_rule == "kinetic-energy" ? " J" : plan.stop_rule == "displacement" ? " m per check window" : "")
             << "), or max_time " << g6(plan.max_time) << " s"
             << (plan.damping > 0 ? "; damping " + g6(plan.damping) : std::string()) << "\n";
@@ -324,9 +322,7 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
       {"final_largest_overlap", final_overlap.largest},
       {"contacts", res.contacts.size()},
       {"stop_rule", plan.stop_rule},
-      {"stop_threshold", plan.stop_rule == "kinetic-energy"     ? plan.kinetic_threshold
-                         : plan.stop_rule == "unbalanced-force" ? plan.unbalanced_threshold
-                                                                : plan.displacement_threshold},
+      {"stop_threshold", stop_threshold(plan)},
       {"final_unbalanced_force", std::isfinite(res.final_unbalanced_force) ? nlohmann::json(res.final_unbalanced_force)
                                                                            : nlohmann::json(nullptr)},
       {"stop_value", std::isfinite(res.stop_value) ? nlohmann::json(res.stop_value) : nlohmann::json(nullptr)},
