@@ -60,6 +60,15 @@ struct RelaxSpec {
   double stop_kinetic_ratio = 1e-6; // stop when kinetic energy < ratio * sum_i m_i g d_i
   double timestep_fraction = 0.2;   // of the Rayleigh / contact time
   std::optional<double> timestep;   // requested step; refused if above the stable one
+  // Which rule ends the relaxation (besides max_time): "kinetic-energy" (E < stop_kinetic_ratio sum m g d),
+  // "unbalanced-force" (YADE's utils.unbalancedForce() < stop_unbalanced_force) or "displacement" (the
+  // largest grain displacement over the last check window < stop_displacement * smallest diameter).
+  std::string stop_rule = "kinetic-energy";
+  double stop_unbalanced_force = 1e-3;
+  double stop_displacement = 1e-4;
+  double damping = 0.0;             // YADE's NewtonIntegrator damping (local, non-viscous), in [0, 1); 0 = off
+  double open_margin = 10.0;        // open container: grains farther than this many largest diameters
+                                    // beyond the packing's footprint are removed (and counted)
 };
 
 // A single larger grain dropped first, so it sits on the floor under the bed (Brazil nut).

@@ -159,7 +159,8 @@ class SceneParser {
   void parse_relax() {
     auto s = rd_.table(root_, "relax", "[relax]");
     if (!s) return;
-    rd_.check_keys(*s, {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep"});
+    rd_.check_keys(*s, {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep", "stop_rule",
+                        "stop_unbalanced_force", "stop_displacement", "damping", "open_margin"});
     RelaxSpec& r = scene_.relax;
     r.engine = rd_.choice(*s, "engine", {"liggghts", "yade"}).value_or(r.engine);
     r.model = rd_.choice(*s, "model", {"hertz", "hooke"}).value_or(r.model);
@@ -169,6 +170,17 @@ class SceneParser {
     r.timestep_fraction = rd_.number_or(*s, "timestep_fraction", r.timestep_fraction,
                                         [](double v) { return v > 0.0 && v <= 1.0; }, "a fraction in (0, 1]");
     if (auto t = rd_.number(*s, "timestep", positive, "a positive time step [s]")) r.timestep = *t;
+    r.stop_rule = rd_.choice(*s, "stop_rule", {"kinetic-energy", "unbalanced-force", "displacement"}).value_or(r.stop_rule);
+    r.stop_unbalanced_force = rd_.number_or(*s, "stop_unbalanced_force", r.stop_unbalanced_force,
+                                            [](double v) { return v > 0.0 && v < 1.0; },
+                                            "a ratio in (0, 1) (mean resultant force / mean contact force)");
+    r.stop_displacement = rd_.number_or(*s, "stop_displacement", r.stop_displacement,
+                                        [](double v) { return v > 0.0 && v < 1.0; },
+                                        "a fraction in (0, 1) of the smallest grain diameter");
+    r.damping = rd_.number_or(*s, "damping", r.damping, [](double v) { return v >= 0.0 && v < 1.0; },
+                              "a damping coefficient in [0, 1) (YADE's NewtonIntegrator damping; 0 = off)");
+    r.open_margin = rd_.number_or(*s, "open_margin", r.open_margin, positive,
+                                  "a positive number of largest grain diameters");
   }
 
   RadiusSpec parse_radius(const Section& s) {

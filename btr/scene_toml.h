@@ -56,6 +56,17 @@
 // [relax]                        optional
 //   engine "liggghts" | "yade" (liggghts), model "hertz" | "hooke" (hertz), max_time > 0 [s] (0.2),
 //   stop_kinetic_ratio > 0 (1e-6), timestep_fraction in (0, 1] (0.2), timestep > 0 [s] (optional)
+//   stop_rule "kinetic-energy" | "unbalanced-force" | "displacement" (kinetic-energy): what ends the run
+//     before max_time, checked at every check of the schedule once t >= sqrt(2 r_min / g):
+//     kinetic-energy: E and its mean over the check window < stop_kinetic_ratio * sum m g d;
+//     unbalanced-force: YADE's utils.unbalancedForce() (mean over grains of |contact forces + m g| /
+//       mean over contacts of |contact force|) < stop_unbalanced_force in (0, 1) (1e-3);
+//     displacement: the largest grain displacement over the last check window < stop_displacement
+//       in (0, 1) (1e-4) times the smallest grain diameter.
+//   damping in [0, 1) (0 = off): YADE's NewtonIntegrator damping (local non-viscous); LIGGGHTS: fix
+//     viscous of equal dissipation per oscillation (coupling/README.md)
+//   open_margin > 0 (10): container "open" only: grains whose centre gets farther than open_margin largest
+//     diameters beyond the packing's footprint are removed from the run and counted (both engines)
 //
 // [intruder]                     optional (Brazil nut): one larger grain, dropped first (it rests on the
 //                                floor under the bed); needs a bed of equal grains (one component,

@@ -214,7 +214,12 @@ json scene_core_to_json(const Scene& s) {
         {"max_time", s.relax.max_time},
         {"stop_kinetic_ratio", s.relax.stop_kinetic_ratio},
         {"timestep_fraction", s.relax.timestep_fraction},
-        {"timestep", s.relax.timestep ? json(*s.relax.timestep) : json(nullptr)}}},
+        {"timestep", s.relax.timestep ? json(*s.relax.timestep) : json(nullptr)},
+        {"stop_rule", s.relax.stop_rule},
+        {"stop_unbalanced_force", s.relax.stop_unbalanced_force},
+        {"stop_displacement", s.relax.stop_displacement},
+        {"damping", s.relax.damping},
+        {"open_margin", s.relax.open_margin}}},
   };
 }
 
@@ -285,7 +290,8 @@ Scene scene_from_json(const json& j, const std::string& origin) {
   s.source.file = rd.string(src, "source", "file");
 
   const json& r = rd.object(j, "", "relax",
-                            {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep"});
+                            {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep",
+                             "stop_rule", "stop_unbalanced_force", "stop_displacement", "damping", "open_margin"});
   s.relax.engine = rd.string(r, "relax", "engine");
   s.relax.model = rd.string(r, "relax", "model");
   s.relax.max_time = rd.number(r, "relax", "max_time");
@@ -295,6 +301,12 @@ Scene scene_from_json(const json& j, const std::string& origin) {
   if (ts.is_null()) s.relax.timestep.reset();
   else if (ts.is_number()) s.relax.timestep = ts.get<double>();
   else rd.fail("relax.timestep", "expected a number or null, got " + ts.dump());
+  // Keys added later: packings written before them have none and take the defaults.
+  if (r.contains("stop_rule")) s.relax.stop_rule = rd.string(r, "relax", "stop_rule");
+  if (r.contains("stop_unbalanced_force")) s.relax.stop_unbalanced_force = rd.number(r, "relax", "stop_unbalanced_force");
+  if (r.contains("stop_displacement")) s.relax.stop_displacement = rd.number(r, "relax", "stop_displacement");
+  if (r.contains("damping")) s.relax.damping = rd.number(r, "relax", "damping");
+  if (r.contains("open_margin")) s.relax.open_margin = rd.number(r, "relax", "open_margin");
   if (j.contains("intruder")) {
     const json& in = rd.object(j, "", "intruder", {"diameter_ratio", "x", "y", "species"});
     IntruderSpec spec;

@@ -315,6 +315,36 @@ TEST_F(SceneFile, RadiusWithAListSourceIsAnError) {
       << error_of(text);
 }
 
+TEST_F(SceneFile, RelaxStopRuleDampingAndMarginAreReadAndChecked) {
+  const std::string good = kBase + "\n[relax]\nstop_rule = \"unbalanced-force\"\nstop_unbalanced_force = 5e-4\n"
+                                   "stop_displacement = 2e-3\ndamping = 0.2\nopen_margin = 4\n";
+  path_ = write("x.toml", good);
+  const Scene s = load_scene(path_);
+  EXPECT_EQ(s.relax.stop_rule, "unbalanced-force");
+  EXPECT_EQ(s.relax.stop_unbalanced_force, 5e-4);
+  EXPECT_EQ(s.relax.stop_displacement, 2e-3);
+  EXPECT_EQ(s.relax.damping, 0.2);
+  EXPECT_EQ(s.relax.open_margin, 4.0);
+  const Scene d = load_scene(write("d.toml", kBase));
+  EXPECT_EQ(d.relax.stop_rule, "kinetic-energy");
+  EXPECT_EQ(d.relax.damping, 0.0) << "damping is off by default";
+
+  std::string text = kBase + "\n[relax]\nstop_rule = \"still\"\n";
+  std::string msg = error_of(text);
+  EXPECT_EQ(msg.rfind(at(text, "stop_rule") + "relax.stop_rule", 0), 0u) << msg;
+  EXPECT_NE(msg.find("unbalanced-force"), std::string::npos) << msg;
+  text = kBase + "\n[relax]\ndamping = 1.0\n";
+  msg = error_of(text);
+  EXPECT_EQ(msg.rfind(at(text, "damping") + "relax.damping", 0), 0u) << msg;
+  EXPECT_NE(msg.find("[0, 1)"), std::string::npos) << msg;
+  text = kBase + "\n[relax]\nstop_unbalanced_force = 0\n";
+  EXPECT_NE(error_of(text).find("relax.stop_unbalanced_force"), std::string::npos);
+  text = kBase + "\n[relax]\nstop_displacement = 2\n";
+  EXPECT_NE(error_of(text).find("relax.stop_displacement"), std::string::npos);
+  text = kBase + "\n[relax]\nopen_margin = -1\n";
+  EXPECT_NE(error_of(text).find("relax.open_margin"), std::string::npos);
+}
+
 TEST_F(SceneFile, TomlSyntaxErrorNamesTheLine) {
   const std::string text = replace(kBase, "count = 100", "count = = 100");
   const std::string msg = error_of(text);

@@ -84,3 +84,22 @@ def test_cli_compare_reports_bad_input(tmp_path, source_dir):
                         "-o", str(tmp_path / "o")], capture_output=True, text=True)
     assert p.returncode == 2
     assert "bad.csv:1: expected the header 'id,x,y,z,radius,species'" in p.stderr
+
+
+def test_grains_removed_on_an_open_floor_are_dropped_from_pre(tmp_path):
+    """POST from an open-floor relaxation lists removed PRE ids in relax.removed: compare drops them from PRE
+    (and only them: a shifted grain would show as a displacement) and renumbers as `btr relax` does."""
+    pos, r, L = fcc(5, 5, d=2e-3)
+    meta = scene_json(L)
+    pre_csv = write(tmp_path, "pre", pos, r, {"scene": meta, "dimension": 3})
+    removed = [3, 17]
+    keep = np.setdiff1d(np.arange(1, len(r) + 1), removed) - 1
+    post_meta = {"scene": meta, "dimension": 3, "relax": {"removed": {"count": 2, "ids": removed}}}
+    post_csv = write(tmp_path, "post", pos[keep], r[keep], post_meta)
+    res = compare(pre_csv, post_csv, str(tmp_path / "out"), progress=lambda *_: None)
+    assert res["displacement_d"]["max"] == pytest.approx(0.0, abs=1e-12)
+    # Without the list, the grain counts differ: refused as before.
+    post_meta["relax"]["removed"]["ids"] = []
+    bad_csv = write(tmp_path, "bad", pos[keep], r[keep], post_meta)
+    with pytest.raises(InputError):
+        compare(pre_csv, bad_csv, str(tmp_path / "out2"), progress=lambda *_: None)

@@ -6,6 +6,8 @@ energy if POST's folder has kinetic.csv), and pre_displacement.vtp / post_displa
 grains at their BTR and relaxed positions with the displacement as point data, for ParaView)."""
 from __future__ import annotations
 
+import csv
+import dataclasses
 import os
 from pathlib import Path
 
@@ -37,6 +39,17 @@ def load_context(pre: Packing, scene_path: str | None):
         return pre.container(), pre.scene()
     except ValueError as e:
         raise InputError(str(e)) from None
+
+
+def without_removed(pre: Packing, post: Packing) -> Packing:
+    """PRE without the grains a relaxation on an open floor removed (POST's JSON relax.removed.ids, ids of
+    PRE), renumbered 1..M as `btr relax` renumbers POST; PRE itself when nothing was removed."""
+    removed = ((post.meta.get("relax") or {}).get("removed") or {}).get("ids") or []
+    if not removed:
+        return pre
+    keep = ~np.isin(pre.ids, np.asarray(removed, dtype=np.int64))
+    return dataclasses.replace(pre, ids=np.arange(1, int(keep.sum()) + 1, dtype=pre.ids.dtype), pos=pre.pos[keep],
+                               radius=pre.radius[keep], species=pre.species[keep])
 
 
 def align(pre: Packing, post: Packing):
@@ -75,6 +88,7 @@ def compare(pre_path: str, post_path: str, outdir: str, scene_path: str | None =
     (out / "figures").mkdir(parents=True, exist_ok=True)
     pre = read_packing(pre_path)
     post = read_packing(post_path)
+    pre = without_removed(pre, post)
     align(pre, post)
     container, scene = load_context(pre, scene_path)
     d = mean_diameter(pre.radius)
