@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from btrdem.compare import compare
-from btrdem.io import InputError, read_vtp_arrays
+from btrdem.io import InputError, Packing, read_packing, read_vtp_arrays, write_packing
 from lattices import fcc
 from scenes import packing_with_scene
 
@@ -90,16 +90,21 @@ def test_grains_removed_on_an_open_floor_are_dropped_from_pre(tmp_path):
     """POST from an open-floor relaxation lists removed PRE ids in relax.removed: compare drops them from PRE
     (and only them: a shifted grain would show as a displacement) and renumbers as `btr relax` does."""
     pos, r, L = fcc(5, 5, d=2e-3)
-    meta = scene_json(L)
-    pre_csv = write(tmp_path, "pre", pos, r, {"scene": meta, "dimension": 3})
+    pre_csv = write(tmp_path, "pre", pos, r, L)
+    pre = read_packing(pre_csv)
     removed = [3, 17]
     keep = np.setdiff1d(np.arange(1, len(r) + 1), removed) - 1
-    post_meta = {"scene": meta, "dimension": 3, "relax": {"removed": {"count": 2, "ids": removed}}}
-    post_csv = write(tmp_path, "post", pos[keep], r[keep], post_meta)
+    post_meta = dict(pre.meta, relax={"removed": {"count": 2, "ids": removed}})
+
+    def post_packing(name, meta):
+        p = Packing(ids=np.arange(1, len(keep) + 1), pos=pos[keep], radius=r[keep], species=np.ones(len(keep), int),
+                    meta=meta)
+        return write_packing(tmp_path, name, p, vtp=False)["csv"]
+
+    post_csv = post_packing("post", post_meta)
     res = compare(pre_csv, post_csv, str(tmp_path / "out"), progress=lambda *_: None)
     assert res["displacement_d"]["max"] == pytest.approx(0.0, abs=1e-12)
     # Without the list, the grain counts differ: refused as before.
-    post_meta["relax"]["removed"]["ids"] = []
-    bad_csv = write(tmp_path, "bad", pos[keep], r[keep], post_meta)
+    bad_csv = post_packing("bad", dict(pre.meta, relax={"removed": {"count": 2, "ids": []}}))
     with pytest.raises(InputError):
         compare(pre_csv, bad_csv, str(tmp_path / "out2"), progress=lambda *_: None)

@@ -16,7 +16,8 @@ import numpy as np
 from . import measures, report
 from .displacement import displacement, displacement_stats, local_displacement, mean_diameter
 from .geometry import Container
-from .io import InputError, Packing, atomic_write_text, read_packing, read_scene_toml, write_json, write_vtp
+from .io import (InputError, Packing, atomic_write_text, read_packing, read_scene_toml, write_json, write_packing,
+                 write_vtp)
 from .nonphysical import THRESHOLDS, nonphysical, nonphysical_md
 from .support import btr_supports
 
@@ -88,7 +89,10 @@ def compare(pre_path: str, post_path: str, outdir: str, scene_path: str | None =
     (out / "figures").mkdir(parents=True, exist_ok=True)
     pre = read_packing(pre_path)
     post = read_packing(post_path)
-    pre = without_removed(pre, post)
+    kept = without_removed(pre, post)
+    if kept is not pre:  # measure the grains POST still has, under the ids POST uses
+        pre_path = write_packing(out, "pre_kept", kept, vtp=False)["csv"]
+        pre = kept
     align(pre, post)
     container, scene = load_context(pre, scene_path)
     d = mean_diameter(pre.radius)
