@@ -5,13 +5,13 @@
 #include <iostream>
 #include <map>
 #include <memory>
-#include <sstream>
 
 #include "btr/check.h"
 #include "btr/deposition.h"
 #include "btr/metrics.h"
 #include "btr/run_scene.h"
 #include "btr/scene_toml.h"
+#include "command_support.h"
 #include "commands.h"
 #include "measures_json.h"
 #include "coupling/packing_io.h"
@@ -34,50 +34,20 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
-std::string check_message(const btr::CheckReport& c) {
-  std::ostringstream s;
-  s << c.overlaps << " overlapping pair(s) (largest overlap " << c.max_overlap << " of the smaller radius), "
-    << c.unsupported << " unsupported, " << c.outside << " outside the container";
-  if (!c.examples.empty()) {
-    s << "; grains";
-    for (std::size_t i = 0; i < c.examples.size(); ++i) s << (i ? ", " : " ") << c.examples[i];
-  }
-  return s.str();
-}
-
 int run(const Options& o, const CLI::App& cmd) {
   const auto t_start = std::chrono::steady_clock::now();
-  btr::Scene scene;
-  try {
-    scene = btr::load_scene(o.scene);
-  } catch (const btr::SceneError& e) {
-    std::cerr << "btr deposit: " << e.what() << "\n";
-    return kBadInput;
-  }
+  btr::Scene scene = btr::load_scene(o.scene);
   const std::uint64_t seed = cmd.count("--seed") ? o.seed : scene.seed;
   const std::int64_t count = cmd.count("--count") ? o.count : scene.grains.count;
-  const std::string name = o.name.empty() ? scene.name : o.name;
-  if (name.empty() || name.find('/') != std::string::npos) {
-    std::cerr << "btr deposit: --name '" << name << "': expected a file name without '/'\n";
-    return kBadInput;
-  }
+  const std::string name = output_name(o.name, scene);
   scene.seed = seed;  // the stored scene rebuilds exactly this packing
   scene.grains.count = count;
 
   // ---- deposition
   btr::RunResult result;
-  try {
+  {
     ProgressBar bar(scene.name, o.quiet);
     result = btr::run_scene(scene, seed, count, [&](std::int64_t done, std::int64_t total) { bar.update(done, total); });
-  } catch (const btr::SceneError& e) {
-    std::cerr << "btr deposit: " << e.what() << "\n";
-    return kBadInput;
-  } catch (const btr::PlacementError& e) {
-    std::cerr << "btr deposit: placement failed: " << e.what() << "\n";
-    return kInternalFailure;
-  } catch (const std::exception& e) {
-    std::cerr << "btr deposit: " << e.what() << "\n";
-    return kInternalFailure;
   }
   btr::Packing packing;
   packing.grains = std::move(result.grains);
@@ -92,9 +62,7 @@ int run(const Options& o, const CLI::App& cmd) {
     auto t = std::chrono::steady_clock::now();
     report = btr::check_packing(grains, scene.dimension, scene.container);
     check_seconds = seconds_since(t);
-    check_json = {{"ok", report.ok()},          {"overlaps", report.overlaps},
-                  {"max_overlap", report.max_overlap}, {"unsupported", report.unsupported},
-                  {"outside", report.outside},  {"examples", report.examples}};
+    check_json = check_to_json(report);
   }
 
   // ---- summary measures
@@ -132,18 +100,12 @@ int run(const Options& o, const CLI::App& cmd) {
       {"check", check_json},
       {"measures", measures_to_json(measures)},
   };
-  double write_seconds = 0.0;
-  try {
-    auto t = std::chrono::steady_clock::now();
-    std::vector<double> z(measures.coordination.begin(), measures.coordination.end());
-    btr::write_packing(o.out, name, packing, {{"coordination", std::move(z)}});
-    write_seconds = seconds_since(t);
-    packing.meta["timings"]["writing"] = write_seconds;
-    btr::write_packing_meta(o.out, name, packing.meta);
-  } catch (const std::exception& e) {
-    std::cerr << "btr deposit: " << e.what() << "\n";
-    return kInternalFailure;
-  }
+  auto t_write = std::chrono::steady_clock::now();
+  std::vector<double> z(measures.coordination.begin(), measures.coordination.end());
+  btr::write_packing(o.out, name, packing, {{"coordination", std::move(z)}});
+  const double write_seconds = seconds_since(t_write);
+  packing.meta["timings"]["writing"] = write_seconds;
+  btr::write_packing_meta(o.out, name, packing.meta);
 
   // ---- summary
   if (!o.quiet) {
@@ -184,7 +146,7 @@ Runner add_deposit_command(CLI::App& app) {
                 "the files are still written, and the exit code is 4 if anything is wrong");
   cmd->add_flag("-q,--quiet", o->quiet, "no progress bar and no summary; only errors");
   cmd->add_option("--name", o->name, "base name of the output files (default: the scene name)");
-  return [o, cmd]() { return run(*o, *cmd); };
+  return [o, cmd]() { return run_reporting_errors("deposit", [&] { return run(*o, *cmd); }); };
 }
 
 }  // namespace btr_app

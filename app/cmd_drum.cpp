@@ -10,11 +10,11 @@
 #include <iostream>
 #include <memory>
 
-#include "btr/check.h"
 #include "btr/deposition.h"
 #include "btr/drum.h"
 #include "btr/run_scene.h"
 #include "btr/scene_toml.h"
+#include "command_support.h"
 #include "commands.h"
 #include "coupling/scene_json.h"
 #include "coupling/text_file.h"
@@ -47,28 +47,16 @@ std::string row_text(std::int64_t step, double angle_deg, double seconds, double
 }
 
 int run(const Options& o, const CLI::App& cmd) {
-  btr::Scene scene;
-  try {
-    scene = btr::load_scene(o.scene);
-  } catch (const btr::SceneError& e) {
-    std::cerr << "btr drum: " << e.what() << "\n";
-    return kBadInput;
-  }
-  if (!scene.drum) {
-    std::cerr << "btr drum: " << o.scene << ": missing table [drum] (steps_per_revolution, revolutions, lift, "
-                 "snapshot_every) with container.kind = \"drum\"\n";
-    return kBadInput;
-  }
+  btr::Scene scene = btr::load_scene(o.scene);
+  if (!scene.drum)
+    throw btr::SceneError(o.scene + ": missing table [drum] (steps_per_revolution, revolutions, lift, "
+                          "snapshot_every) with container.kind = \"drum\"");
   const std::uint64_t seed = cmd.count("--seed") ? o.seed : scene.seed;
   scene.seed = seed;
   const btr::DrumSpec dr = *scene.drum;
   const std::int64_t steps =
       cmd.count("--steps") ? o.steps : std::llround(dr.revolutions * static_cast<double>(dr.steps_per_revolution));
-  const std::string name = o.name.empty() ? scene.name : o.name;
-  if (name.empty() || name.find('/') != std::string::npos) {
-    std::cerr << "btr drum: --name '" << name << "': expected a file name without '/'\n";
-    return kBadInput;
-  }
+  const std::string name = output_name(o.name, scene);
   const double R = scene.container.radius, dphi = 2.0 * M_PI / static_cast<double>(dr.steps_per_revolution);
   const json scene_json = btr::scene_to_json(scene);
   SeriesWriter series(o.out, name, "step");
@@ -76,55 +64,33 @@ int run(const Options& o, const CLI::App& cmd) {
       "step,angle_deg,seconds,cpu_seconds,segregation_index,axis_small_R,axis_large_R,core_small_R,core_large_R,com_x_R,com_z_R,"
       "surface_angle_deg\n";
   bool all_ok = true;
-  btr::Grains grains;
-  double fill_seconds = 0.0, step_seconds = 0.0;
-  try {
-    auto t0 = std::chrono::steady_clock::now();
-    double c0 = cpu_now();
-    ProgressBar bar(scene.name, o.quiet);
-    grains = btr::run_scene(scene, seed, scene.grains.count, {}).grains;
-    fill_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    btr::DrumStepper stepper(scene.dimension, scene.container, dr.lift);
-    double seconds = fill_seconds, cpu = cpu_now() - c0;
-    for (std::int64_t s = 0;; ++s) {
-      const double angle_deg = 360.0 * static_cast<double>(s) / static_cast<double>(dr.steps_per_revolution);
-      table += row_text(s, angle_deg, seconds, cpu, btr::drum_measures(grains, scene.dimension, scene.container), R);
-      if (s % dr.snapshot_every == 0 || s == steps) {
-        json meta = {{"program", "btr"}, {"version", BTR_VERSION}, {"command", "drum"},
-                     {"scene_name", scene.name}, {"scene_file", scene.file}, {"scene", scene_json},
-                     {"seed", seed}, {"dimension", scene.dimension}, {"container", scene_json["container"]},
-                     {"count", grains.size()}, {"step", s}, {"angle_deg", angle_deg}};
-        if (o.check) {
-          const btr::CheckReport rep = btr::check_packing(grains, scene.dimension, scene.container);
-          meta["check"] = {{"ok", rep.ok()}, {"overlaps", rep.overlaps}, {"unsupported", rep.unsupported},
-                           {"outside", rep.outside}, {"examples", rep.examples}};
-          if (!rep.ok()) {
-            all_ok = false;
-            std::cerr << "btr drum: check failed at step " << s << ": " << rep.overlaps << " overlaps, "
-                      << rep.unsupported << " unsupported, " << rep.outside << " outside\n";
-          }
-        }
-        series.write(s, angle_deg, grains, meta);
-      }
-      btr::write_text_file(o.out + "/" + name + "_steps.csv", table);
-      if (s == steps) break;
-      bar.update(s, steps);
-      const auto t = std::chrono::steady_clock::now();
-      c0 = cpu_now();
-      grains = stepper.step(grains, dphi);
-      seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-      cpu = cpu_now() - c0;
-      step_seconds += seconds;
+  auto t0 = std::chrono::steady_clock::now();
+  double c0 = cpu_now();
+  ProgressBar bar(scene.name, o.quiet);
+  btr::Grains grains = btr::run_scene(scene, seed, scene.grains.count, {}).grains;
+  const double fill_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  double step_seconds = 0.0;
+  btr::DrumStepper stepper(scene.dimension, scene.container, dr.lift);
+  double seconds = fill_seconds, cpu = cpu_now() - c0;
+  for (std::int64_t s = 0;; ++s) {
+    const double angle_deg = 360.0 * static_cast<double>(s) / static_cast<double>(dr.steps_per_revolution);
+    table += row_text(s, angle_deg, seconds, cpu, btr::drum_measures(grains, scene.dimension, scene.container), R);
+    if (s % dr.snapshot_every == 0 || s == steps) {
+      json meta = snapshot_meta("drum", scene, scene_json, seed, grains.size());
+      meta["step"] = s;
+      meta["angle_deg"] = angle_deg;
+      if (o.check) all_ok = check_snapshot("drum", "step", s, grains, scene, meta) && all_ok;
+      series.write(s, angle_deg, grains, meta);
     }
-  } catch (const btr::SceneError& e) {
-    std::cerr << "btr drum: " << e.what() << "\n";
-    return kBadInput;
-  } catch (const btr::PlacementError& e) {
-    std::cerr << "btr drum: placement failed: " << e.what() << "\n";
-    return kInternalFailure;
-  } catch (const std::exception& e) {
-    std::cerr << "btr drum: " << e.what() << "\n";
-    return kInternalFailure;
+    btr::write_text_file(o.out + "/" + name + "_steps.csv", table);
+    if (s == steps) break;
+    bar.update(s, steps);
+    const auto t = std::chrono::steady_clock::now();
+    c0 = cpu_now();
+    grains = stepper.step(grains, dphi);
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+    cpu = cpu_now() - c0;
+    step_seconds += seconds;
   }
   if (!o.quiet) {
     std::printf("%s: %zu grains (%dD drum, radius %.4g m, seed %llu): fill %.3f s, %lld steps in %.3f s "
@@ -135,8 +101,7 @@ int run(const Options& o, const CLI::App& cmd) {
     std::printf("  wrote %s/%s.pvd (%d snapshots) and %s_steps.csv\n", o.out.c_str(), name.c_str(), series.count(),
                 name.c_str());
   }
-  if (o.check && !all_ok) return kCheckFailed;
-  return kSuccess;
+  return o.check && !all_ok ? kCheckFailed : kSuccess;
 }
 
 }  // namespace
@@ -162,7 +127,7 @@ Runner add_drum_command(CLI::App& app) {
   cmd->add_flag("--check", o->check, "self-check every snapshot; exit code 4 if any fails (files are still written)");
   cmd->add_flag("-q,--quiet", o->quiet, "no progress bar and no summary; only errors");
   cmd->add_option("--name", o->name, "base name of the output files (default: the scene name)");
-  return [o, cmd]() { return run(*o, *cmd); };
+  return [o, cmd]() { return run_reporting_errors("drum", [&] { return run(*o, *cmd); }); };
 }
 
 }  // namespace btr_app

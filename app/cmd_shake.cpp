@@ -8,16 +8,14 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
-#include <sstream>
 
-#include "btr/check.h"
 #include "btr/deposition.h"
 #include "btr/metrics.h"
 #include "btr/run_scene.h"
 #include "btr/scene_toml.h"
 #include "btr/shaking.h"
+#include "command_support.h"
 #include "commands.h"
-#include "coupling/packing_io.h"
 #include "coupling/scene_json.h"
 #include "coupling/text_file.h"
 #include "progress.h"
@@ -75,82 +73,47 @@ std::string row_text(const CycleRow& r, double d_small) {
 }
 
 int run(const Options& o, const CLI::App& cmd) {
-  btr::Scene scene;
-  try {
-    scene = btr::load_scene(o.scene);
-  } catch (const btr::SceneError& e) {
-    std::cerr << "btr shake: " << e.what() << "\n";
-    return kBadInput;
-  }
-  if (!scene.shaking) {
-    std::cerr << "btr shake: " << o.scene << ": missing table [shaking] (cycles, lift, noise, snapshot_every)\n";
-    return kBadInput;
-  }
+  btr::Scene scene = btr::load_scene(o.scene);
+  if (!scene.shaking)
+    throw btr::SceneError(o.scene + ": missing table [shaking] (cycles, lift, noise, snapshot_every)");
   const std::uint64_t seed = cmd.count("--seed") ? o.seed : scene.seed;
   scene.seed = seed;
   if (cmd.count("--cycles")) scene.shaking->cycles = o.cycles;
   const btr::ShakingSpec sh = *scene.shaking;
-  const std::string name = o.name.empty() ? scene.name : o.name;
-  if (name.empty() || name.find('/') != std::string::npos) {
-    std::cerr << "btr shake: --name '" << name << "': expected a file name without '/'\n";
-    return kBadInput;
-  }
+  const std::string name = output_name(o.name, scene);
 
   const json scene_json = btr::scene_to_json(scene);
   SeriesWriter series(o.out, name, "cycle");
   std::string table = "cycle,seconds,packing_fraction,bed_top_d,intruder_z_d,intruder_z_over_bed_top,intruder_below_top_d\n";
   bool all_ok = true;
+  auto t0 = std::chrono::steady_clock::now();
+  ProgressBar bar(scene.name, o.quiet);
+  btr::Grains grains = btr::run_scene(scene, seed, scene.grains.count, {}).grains;
+  // Lengths in bed-grain diameters: the bed's equal grains with an intruder, else the mean diameter.
   double d_small = 0.0;
-  btr::Grains grains;
-  try {
-    auto t0 = std::chrono::steady_clock::now();
-    ProgressBar bar(scene.name, o.quiet);
-    grains = btr::run_scene(scene, seed, scene.grains.count, {}).grains;
-    // Lengths in bed-grain diameters: the bed's equal grains with an intruder, else the mean diameter.
-    if (scene.intruder) {
-      d_small = 2.0 * grains.back().r;
-    } else {
-      for (const btr::Grain& g : grains) d_small += 2.0 * g.r;
-      d_small /= static_cast<double>(grains.size());
+  if (scene.intruder) {
+    d_small = 2.0 * grains.back().r;
+  } else {
+    for (const btr::Grain& g : grains) d_small += 2.0 * g.r;
+    d_small /= static_cast<double>(grains.size());
+  }
+  btr::Shaker shaker(scene.dimension, scene.container, sh.lift, sh.noise, seed ^ 0x5348414b45ULL);
+  double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  for (std::int64_t c = 0;; ++c) {
+    const CycleRow row = measure(c, seconds, grains, scene, d_small);
+    table += row_text(row, d_small);
+    if (c % sh.snapshot_every == 0 || c == sh.cycles) {
+      json meta = snapshot_meta("shake", scene, scene_json, seed, grains.size());
+      meta["cycle"] = c;
+      if (o.check) all_ok = check_snapshot("shake", "cycle", c, grains, scene, meta) && all_ok;
+      series.write(c, c, grains, meta);
     }
-    btr::Shaker shaker(scene.dimension, scene.container, sh.lift, sh.noise, seed ^ 0x5348414b45ULL);
-    double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    for (std::int64_t c = 0;; ++c) {
-      const CycleRow row = measure(c, seconds, grains, scene, d_small);
-      table += row_text(row, d_small);
-      if (c % sh.snapshot_every == 0 || c == sh.cycles) {
-        json meta = {{"program", "btr"}, {"version", BTR_VERSION}, {"command", "shake"},
-                     {"scene_name", scene.name}, {"scene_file", scene.file}, {"scene", scene_json},
-                     {"seed", seed}, {"dimension", scene.dimension}, {"container", scene_json["container"]},
-                     {"count", grains.size()}, {"cycle", c}};
-        if (o.check) {
-          const btr::CheckReport rep = btr::check_packing(grains, scene.dimension, scene.container);
-          meta["check"] = {{"ok", rep.ok()}, {"overlaps", rep.overlaps}, {"unsupported", rep.unsupported},
-                           {"outside", rep.outside}, {"examples", rep.examples}};
-          if (!rep.ok()) {
-            all_ok = false;
-            std::cerr << "btr shake: check failed at cycle " << c << ": " << rep.overlaps << " overlaps, "
-                      << rep.unsupported << " unsupported, " << rep.outside << " outside\n";
-          }
-        }
-        series.write(c, c, grains, meta);
-      }
-      btr::write_text_file(o.out + "/" + name + "_cycles.csv", table);
-      if (c == sh.cycles) break;
-      bar.update(c, sh.cycles);
-      const auto t = std::chrono::steady_clock::now();
-      grains = shaker.cycle(grains);
-      seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-    }
-  } catch (const btr::SceneError& e) {
-    std::cerr << "btr shake: " << e.what() << "\n";
-    return kBadInput;
-  } catch (const btr::PlacementError& e) {
-    std::cerr << "btr shake: placement failed: " << e.what() << "\n";
-    return kInternalFailure;
-  } catch (const std::exception& e) {
-    std::cerr << "btr shake: " << e.what() << "\n";
-    return kInternalFailure;
+    btr::write_text_file(o.out + "/" + name + "_cycles.csv", table);
+    if (c == sh.cycles) break;
+    bar.update(c, sh.cycles);
+    const auto t = std::chrono::steady_clock::now();
+    grains = shaker.cycle(grains);
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
   }
   if (!o.quiet) {
     std::printf("%s: %zu grains (%dD, %s container, seed %llu), %lld cycles (lift %.4g m, noise %.4g m)\n",
@@ -159,8 +122,7 @@ int run(const Options& o, const CLI::App& cmd) {
     std::printf("  wrote %s/%s.pvd (%d snapshots) and %s_cycles.csv\n", o.out.c_str(), name.c_str(),
                 series.count(), name.c_str());
   }
-  if (o.check && !all_ok) return kCheckFailed;
-  return kSuccess;
+  return o.check && !all_ok ? kCheckFailed : kSuccess;
 }
 
 }  // namespace
@@ -185,7 +147,7 @@ Runner add_shake_command(CLI::App& app) {
   cmd->add_flag("--check", o->check, "self-check every snapshot; exit code 4 if any fails (files are still written)");
   cmd->add_flag("-q,--quiet", o->quiet, "no progress bar and no summary; only errors");
   cmd->add_option("--name", o->name, "base name of the output files (default: the scene name)");
-  return [o, cmd]() { return run(*o, *cmd); };
+  return [o, cmd]() { return run_reporting_errors("shake", [&] { return run(*o, *cmd); }); };
 }
 
 }  // namespace btr_app

@@ -1,8 +1,11 @@
 #include "series_files.h"
 
 #include <cstdio>
+#include <iostream>
 #include <sstream>
 
+#include "btr/check.h"
+#include "command_support.h"
 #include "coupling/packing_io.h"
 #include "coupling/text_file.h"
 
@@ -28,6 +31,24 @@ void SeriesWriter::write(long long step, double time, const btr::Grains& grains,
     x << "    <DataSet timestep=\"" << t << "\" group=\"\" part=\"0\" file=\"" << f << "\"/>\n";
   x << "  </Collection>\n</VTKFile>\n";
   btr::write_text_file(dir_ + "/" + name_ + ".pvd", x.str());
+}
+
+nlohmann::json snapshot_meta(const char* command, const btr::Scene& scene, const nlohmann::json& scene_json,
+                             std::uint64_t seed, std::size_t count) {
+  return {{"program", "btr"}, {"version", BTR_VERSION},   {"command", command},
+          {"scene_name", scene.name}, {"scene_file", scene.file}, {"scene", scene_json},
+          {"seed", seed},      {"dimension", scene.dimension}, {"container", scene_json["container"]},
+          {"count", count}};
+}
+
+bool check_snapshot(const char* command, const char* counter, long long step, const btr::Grains& grains,
+                    const btr::Scene& scene, nlohmann::json& meta) {
+  const btr::CheckReport rep = btr::check_packing(grains, scene.dimension, scene.container);
+  meta["check"] = check_to_json(rep);
+  if (rep.ok()) return true;
+  std::cerr << "btr " << command << ": check failed at " << counter << " " << step << ": " << check_message(rep)
+            << "\n";
+  return false;
 }
 
 }  // namespace btr_app

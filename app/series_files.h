@@ -4,11 +4,13 @@
 // (temporary name, then renamed) after every snapshot, so an interrupted run leaves a valid series.
 // VTK 9 itself has no writer for .pvd collections (vtkXMLPVDWriter belongs to ParaView's own
 // libraries), and the format is a short XML index, so it is written as text.
+#include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "btr/grain.h"
+#include "btr/scene.h"
 
 namespace btr_app {
 
@@ -26,5 +28,15 @@ class SeriesWriter {
   std::string dir_, name_, step_name_;
   std::vector<std::pair<double, std::string>> entries_;  // time, .vtp file name
 };
+
+// The JSON of one snapshot of `btr COMMAND`: program, version, command, scene, seed, dimension, container,
+// count; the caller adds its counter (cycle, step, angle).
+nlohmann::json snapshot_meta(const char* command, const btr::Scene& scene, const nlohmann::json& scene_json,
+                             std::uint64_t seed, std::size_t count);
+
+// Self-checks a snapshot and stores the result in meta["check"]; on failure prints one line naming the
+// counter ("btr drum: check failed at step 12: ...") and returns false.
+bool check_snapshot(const char* command, const char* counter, long long step, const btr::Grains& grains,
+                    const btr::Scene& scene, nlohmann::json& meta);
 
 }  // namespace btr_app
