@@ -30,7 +30,7 @@ Grains DrumStepper::step(const Grains& grains, double dphi) const {
     // Round-off of the rotation must not put a grain touching the wall through it.
     const double half = container_.radius - grains[i].r;
     moved[i].x.x() = std::clamp(moved[i].x.x(), -half, half);
-    if (dimension_ == 3) {  // a grain on an end wall may sit there within round-off
+    if (dimension_ == 3 && !container_.periodic_ends) {  // a grain on an end wall may sit there within round-off
       const double half_y = 0.5 * container_.size_y - grains[i].r;
       moved[i].x.y() = std::clamp(moved[i].x.y(), -half_y, half_y);
     }

@@ -140,7 +140,6 @@ bool in_window(const Vec3& x, int dimension, const Box& w) {
 class Cells {
  public:
   Cells(const Grains& grains, int dimension, const Container& container, double width) {
-    const bool periodic = container.kind == ContainerKind::Periodic;
     Vec3 lo = Vec3::Constant(std::numeric_limits<double>::max()), hi = -lo;
     for (const Grain& g : grains) {
       lo = lo.cwiseMin(g.x);
@@ -151,7 +150,7 @@ class Cells {
     // Keep the dense cell array at most a few times the number of grains.
     for (;;) {
       for (int a = 0; a < 3; ++a) {
-        periodic_[a] = periodic && a < 2 && !(a == 1 && dimension == 2);
+        periodic_[a] = (a == 0 && wraps_x(container)) || (a == 1 && wraps_y(container, dimension));
         if (periodic_[a]) {
           period_[a] = a == 0 ? container.size_x : container.size_y;
           origin_[a] = -0.5 * period_[a];

@@ -6,12 +6,12 @@
 namespace btr {
 
 NeighbourGrid::NeighbourGrid(int dimension, const Container& c, double r_max)
-    : dimension_(dimension), periodic_(c.kind == ContainerKind::Periodic), grows_(c.kind == ContainerKind::Open),
+    : dimension_(dimension), wrap_x_(wraps_x(c)), wrap_y_(wraps_y(c, dimension)), grows_(c.kind == ContainerKind::Open),
       h_(2.0 * r_max) {
   hx_ = hy_ = h_;
-  auto span = [&](double length, double& origin, long& n, double& width) {
+  auto span = [&](double length, double& origin, long& n, double& width, bool periodic) {
     origin = -0.5 * length;
-    if (periodic_) {
+    if (periodic) {
       n = std::max(1L, static_cast<long>(std::floor(length / h_)));
       width = length / n;
     } else {
@@ -26,23 +26,24 @@ NeighbourGrid::NeighbourGrid(int dimension, const Container& c, double r_max)
       break;
     case ContainerKind::Box:
     case ContainerKind::Periodic:
-      span(c.size_x, x0_, nx_, hx_);
-      if (dimension == 3) span(c.size_y, y0_, ny_, hy_);
+      span(c.size_x, x0_, nx_, hx_, wrap_x_);
+      if (dimension == 3) span(c.size_y, y0_, ny_, hy_, wrap_y_);
       else { y0_ = 0.0; ny_ = 1; }
       period_x_ = c.size_x;
       period_y_ = dimension == 3 ? c.size_y : 0.0;
       break;
     case ContainerKind::HeleShaw:
-      span(c.size_x, x0_, nx_, hx_);
-      span(c.gap, y0_, ny_, hy_);
+      span(c.size_x, x0_, nx_, hx_, wrap_x_);
+      span(c.gap, y0_, ny_, hy_, false);
       break;
     case ContainerKind::Cylinder:
-      span(2.0 * c.radius, x0_, nx_, hx_);
-      span(2.0 * c.radius, y0_, ny_, hy_);
+      span(2.0 * c.radius, x0_, nx_, hx_, false);
+      span(2.0 * c.radius, y0_, ny_, hy_, false);
       break;
     case ContainerKind::Drum:
-      span(2.0 * c.radius, x0_, nx_, hx_);
-      if (dimension == 3) span(c.size_y, y0_, ny_, hy_);
+      span(2.0 * c.radius, x0_, nx_, hx_, false);
+      if (dimension == 3) span(c.size_y, y0_, ny_, hy_, wrap_y_);
+      period_y_ = wrap_y_ ? c.size_y : 0.0;
       break;
   }
   if (dimension == 2) { y0_ = -0.5 * h_; iy0_ = 0; ny_ = 1; hy_ = h_; }
@@ -74,14 +75,12 @@ void NeighbourGrid::grow_to(long ix, long iy) {
 void NeighbourGrid::insert(std::int32_t index, const Vec3& x, double r) {
   long ix = static_cast<long>(std::floor((x.x() - x0_) / hx_));
   long iy = dimension_ == 3 ? static_cast<long>(std::floor((x.y() - y0_) / hy_)) : 0;
-  if (periodic_) {
-    ix -= floor_div(ix, nx_) * nx_;
-    if (dimension_ == 3) iy -= floor_div(iy, ny_) * ny_;
-  } else if (grows_) {
+  if (grows_) {
     if (ix < ix0_ || ix >= ix0_ + nx_ || iy < iy0_ || iy >= iy0_ + ny_) grow_to(ix, iy);
   } else {
-    ix = std::clamp(ix, ix0_, ix0_ + nx_ - 1);  // a centre on the wall's cell edge: round-off only
-    iy = std::clamp(iy, iy0_, iy0_ + ny_ - 1);
+    // A centre on a wall's cell edge is outside by round-off only.
+    ix = wrap_x_ ? ix - floor_div(ix, nx_) * nx_ : std::clamp(ix, ix0_, ix0_ + nx_ - 1);
+    iy = wrap_y_ ? iy - floor_div(iy, ny_) * ny_ : std::clamp(iy, iy0_, iy0_ + ny_ - 1);
   }
   const long iz = std::max(0L, static_cast<long>(std::floor(x.z() / h_)));
   auto& column = columns_[column_of(ix, iy)];

@@ -1,7 +1,7 @@
 #pragma once
 // Uniform grid over x-y columns and height, with cells at least one largest diameter wide, so the
 // grains near a point are found in a constant number of cells whatever the number already placed.
-// Periodic containers wrap columns and report each grain with the shift of the image found.
+// Periodic axes (a periodic container, a drum's periodic ends) wrap columns and report each grain with the shift of the image found.
 // An open floor has no footprint: the grid grows as the heap spreads.
 #include <cmath>
 #include <cstdint>
@@ -42,7 +42,7 @@ class NeighbourGrid {
   void visit_cell_range(Range rx, Range ry, long iz_lo, long iz_hi, F&& f) const;
 
   int dimension_;
-  bool periodic_;
+  bool wrap_x_, wrap_y_;  // periodic axes (wraps_x, wraps_y of the container)
   bool grows_;       // open floor: the footprint is unknown in advance
   double h_;         // cell height and nominal width
   double hx_, hy_;   // cell widths (periodic: the period divided into whole cells)
@@ -63,11 +63,11 @@ template <class F>
 void NeighbourGrid::visit_cell_range(Range rx, Range ry, long iz_lo, long iz_hi, F&& f) const {
   for (long iy = ry.lo; iy <= ry.hi; ++iy) {
     long wy = iy, ky = 0;
-    if (periodic_ && dimension_ == 3) { ky = floor_div(iy, ny_); wy = iy - ky * ny_; }
+    if (wrap_y_) { ky = floor_div(iy, ny_); wy = iy - ky * ny_; }
     else if (iy < iy0_ || iy >= iy0_ + ny_) continue;
     for (long ix = rx.lo; ix <= rx.hi; ++ix) {
       long wx = ix, kx = 0;
-      if (periodic_) { kx = floor_div(ix, nx_); wx = ix - kx * nx_; }
+      if (wrap_x_) { kx = floor_div(ix, nx_); wx = ix - kx * nx_; }
       else if (ix < ix0_ || ix >= ix0_ + nx_) continue;
       const auto& column = columns_[column_of(wx, wy)];
       const long top = std::min<long>(iz_hi, static_cast<long>(column.size()) - 1);
@@ -93,11 +93,11 @@ void NeighbourGrid::visit_column_down(double x, double y, double reach, double z
   long top = -1;
   for (long iy = ry.lo; iy <= ry.hi; ++iy) {
     long wy = iy;
-    if (periodic_ && dimension_ == 3) wy = iy - floor_div(iy, ny_) * ny_;
+    if (wrap_y_) wy = iy - floor_div(iy, ny_) * ny_;
     else if (iy < iy0_ || iy >= iy0_ + ny_) continue;
     for (long ix = rx.lo; ix <= rx.hi; ++ix) {
       long wx = ix;
-      if (periodic_) wx = ix - floor_div(ix, nx_) * nx_;
+      if (wrap_x_) wx = ix - floor_div(ix, nx_) * nx_;
       else if (ix < ix0_ || ix >= ix0_ + nx_) continue;
       top = std::max<long>(top, static_cast<long>(columns_[column_of(wx, wy)].size()) - 1);
     }
