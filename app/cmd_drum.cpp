@@ -13,6 +13,7 @@
 #include "btr/check.h"
 #include "btr/deposition.h"
 #include "btr/drum.h"
+#include "btr/metrics.h"
 #include "btr/run_scene.h"
 #include "btr/scene_toml.h"
 #include "commands.h"

@@ -7,6 +7,7 @@
 #include "btr/check.h"
 #include "btr/deposition.h"
 #include "btr/drum.h"
+#include "btr/metrics.h"
 
 namespace btr {
 namespace {
