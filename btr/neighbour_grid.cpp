@@ -64,7 +64,7 @@ void NeighbourGrid::grow_to(long ix, long iy) {
   while (ix < new_ix0 || ix >= new_ix0 + new_nx) { new_ix0 -= new_nx / 2; new_nx *= 2; }
   if (dimension_ == 3)
     while (iy < new_iy0 || iy >= new_iy0 + new_ny) { new_iy0 -= new_ny / 2; new_ny *= 2; }
-  std::vector<std::vector<Cell>> grown(static_cast<std::size_t>(new_nx * new_ny));
+  std::vector<Column> grown(static_cast<std::size_t>(new_nx * new_ny));
   for (long y = iy0_; y < iy0_ + ny_; ++y)
     for (long x = ix0_; x < ix0_ + nx_; ++x)
       grown[(x - new_ix0) + new_nx * (y - new_iy0)] = std::move(columns_[column_of(x, y)]);
@@ -83,9 +83,15 @@ void NeighbourGrid::insert(std::int32_t index, const Vec3& x, double r) {
     iy = wrap_y_ ? iy - floor_div(iy, ny_) * ny_ : std::clamp(iy, iy0_, iy0_ + ny_ - 1);
   }
   const long iz = std::max(0L, static_cast<long>(std::floor(x.z() / h_)));
-  auto& column = columns_[column_of(ix, iy)];
-  if (static_cast<long>(column.size()) <= iz) column.resize(iz + 1);
-  column[iz].push_back(Entry{x.x(), x.y(), x.z(), r, index});
+  Column& column = columns_[column_of(ix, iy)];
+  if (column.start.empty()) column.start.push_back(0);
+  if (column.layers() <= iz) {
+    const std::uint32_t end = column.start.back();  // a copy: resize may move the storage
+    column.start.resize(static_cast<std::size_t>(iz) + 2, end);
+  }
+  // At the end of layer iz; the layers above (usually none: grains mostly land on top) move up by one.
+  column.entries.insert(column.entries.begin() + column.start[iz + 1], Entry{x.x(), x.y(), x.z(), r, index});
+  for (std::size_t k = static_cast<std::size_t>(iz) + 1; k < column.start.size(); ++k) ++column.start[k];
 }
 
 }  // namespace btr

@@ -55,8 +55,14 @@ class NeighbourGrid {
     double x, y, z, r;
     std::int32_t index;
   };
-  using Cell = std::vector<Entry>;
-  std::vector<std::vector<Cell>> columns_;  // per column, per layer
+  // The cells of one column stored contiguously, layer after layer, each in insertion order: a query
+  // over a run of layers reads one block of memory instead of one heap block per cell.
+  struct Column {
+    std::vector<std::uint32_t> start;  // layer iz holds entries [start[iz], start[iz + 1]); empty: no layer
+    std::vector<Entry> entries;
+    long layers() const { return start.empty() ? 0 : static_cast<long>(start.size()) - 1; }
+  };
+  std::vector<Column> columns_;
 };
 
 template <class F>
@@ -69,13 +75,14 @@ void NeighbourGrid::visit_cell_range(Range rx, Range ry, long iz_lo, long iz_hi,
       long wx = ix, kx = 0;
       if (wrap_x_) { kx = floor_div(ix, nx_); wx = ix - kx * nx_; }
       else if (ix < ix0_ || ix >= ix0_ + nx_) continue;
-      const auto& column = columns_[column_of(wx, wy)];
-      const long top = std::min<long>(iz_hi, static_cast<long>(column.size()) - 1);
-      if (top < iz_lo) continue;
+      const Column& column = columns_[column_of(wx, wy)];
+      const long top = std::min<long>(iz_hi, column.layers() - 1), bottom = std::max(0L, iz_lo);
+      if (top < bottom) continue;
       const double sx = kx * period_x_, sy = ky * period_y_;
       const int image = static_cast<int>((kx + 4) * 9 + (ky + 4));
-      for (long iz = std::max(0L, iz_lo); iz <= top; ++iz)
-        for (const Entry& e : column[iz]) f(e.index, Vec3(e.x + sx, e.y + sy, e.z), e.r, image);
+      const Entry* e = column.entries.data() + column.start[bottom];
+      const Entry* end = column.entries.data() + column.start[top + 1];
+      for (; e != end; ++e) f(e->index, Vec3(e->x + sx, e->y + sy, e->z), e->r, image);
     }
   }
 }
@@ -99,7 +106,7 @@ void NeighbourGrid::visit_column_down(double x, double y, double reach, double z
       long wx = ix;
       if (wrap_x_) wx = ix - floor_div(ix, nx_) * nx_;
       else if (ix < ix0_ || ix >= ix0_ + nx_) continue;
-      top = std::max<long>(top, static_cast<long>(columns_[column_of(wx, wy)].size()) - 1);
+      top = std::max<long>(top, columns_[column_of(wx, wy)].layers() - 1);
     }
   }
   top = std::min<long>(top, static_cast<long>(std::floor(z_start / h_)));
