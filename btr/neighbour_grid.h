@@ -67,6 +67,24 @@ class NeighbourGrid {
 
 template <class F>
 void NeighbourGrid::visit_cell_range(Range rx, Range ry, long iz_lo, long iz_hi, F&& f) const {
+  // First gather the runs of entries of every column and ask for their first cache lines, so the memory
+  // loads overlap; then visit them in the same order (column by column, layer by layer).
+  struct Run {
+    const Entry *begin, *end;
+    double sx, sy;
+    int image;
+  };
+  constexpr int kBatch = 32;
+  Run runs[kBatch];
+  int n = 0;
+  auto flush = [&] {
+    for (int k = 0; k < n; ++k) {
+      const Run& run = runs[k];
+      for (const Entry* e = run.begin; e != run.end; ++e)
+        f(e->index, Vec3(e->x + run.sx, e->y + run.sy, e->z), e->r, run.image);
+    }
+    n = 0;
+  };
   for (long iy = ry.lo; iy <= ry.hi; ++iy) {
     long wy = iy, ky = 0;
     if (wrap_y_) { ky = floor_div(iy, ny_); wy = iy - ky * ny_; }
@@ -78,13 +96,16 @@ void NeighbourGrid::visit_cell_range(Range rx, Range ry, long iz_lo, long iz_hi,
       const Column& column = columns_[column_of(wx, wy)];
       const long top = std::min<long>(iz_hi, column.layers() - 1), bottom = std::max(0L, iz_lo);
       if (top < bottom) continue;
-      const double sx = kx * period_x_, sy = ky * period_y_;
-      const int image = static_cast<int>((kx + 4) * 9 + (ky + 4));
-      const Entry* e = column.entries.data() + column.start[bottom];
+      const Entry* begin = column.entries.data() + column.start[bottom];
       const Entry* end = column.entries.data() + column.start[top + 1];
-      for (; e != end; ++e) f(e->index, Vec3(e->x + sx, e->y + sy, e->z), e->r, image);
+      if (begin == end) continue;
+      __builtin_prefetch(begin);
+      __builtin_prefetch(reinterpret_cast<const char*>(begin) + 64);
+      runs[n++] = Run{begin, end, kx * period_x_, ky * period_y_, static_cast<int>((kx + 4) * 9 + (ky + 4))};
+      if (n == kBatch) flush();
     }
   }
+  flush();
 }
 
 template <class F>
