@@ -12,6 +12,7 @@
 
 #include "btr/deposition.h"
 #include "btr/drum.h"
+#include "btr/metrics.h"
 #include "btr/run_scene.h"
 #include "btr/scene_toml.h"
 #include "command_support.h"

@@ -41,8 +41,8 @@ class ColumnGrid {
       : reach_(reach) {
     period_[0] = c.size_x;
     period_[1] = c.size_y;
-    periodic_[0] = c.kind == ContainerKind::Periodic && std::isfinite(c.size_x) && c.size_x > 0;
-    periodic_[1] = c.kind == ContainerKind::Periodic && dimension == 3 && std::isfinite(c.size_y) && c.size_y > 0;
+    periodic_[0] = wraps_x(c) && std::isfinite(c.size_x) && c.size_x > 0;
+    periodic_[1] = wraps_y(c, dimension) && std::isfinite(c.size_y) && c.size_y > 0;
     double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
     for (std::uint32_t i : members)
       for (int a = 0; a < 2; ++a) {
@@ -234,7 +234,7 @@ Walls walls_of(const Container& c, int dimension, const Vec3& p, double r) {
     }
     case ContainerKind::Drum: {
       // Axis along y at height z = radius; the gap is measured to the circle of the drum's section.
-      if (dimension == 3) pair_of_planes(1, 0.5 * c.size_y);
+      if (dimension == 3 && !c.periodic_ends) pair_of_planes(1, 0.5 * c.size_y);
       const double dx = p.x(), dz = p.z() - c.radius, rho = std::hypot(dx, dz);
       const Vec3 n = rho > 0 ? Vec3(-dx / rho, 0, -dz / rho) : Vec3(0, 0, 1);
       w.push_back({c.radius - rho - r, n});
@@ -274,9 +274,8 @@ CheckReport check_packing(const Grains& grains, int dimension, const Container& 
   if (r_max == 0) return rep;
 
   // A periodic axis without a positive period (an invalid container) is treated as unbounded.
-  const bool periodic = container.kind == ContainerKind::Periodic;
-  const bool px = periodic && std::isfinite(container.size_x) && container.size_x > 0;
-  const bool py = periodic && dimension == 3 && std::isfinite(container.size_y) && container.size_y > 0;
+  const bool px = wraps_x(container) && std::isfinite(container.size_x) && container.size_x > 0;
+  const bool py = wraps_y(container, dimension) && std::isfinite(container.size_y) && container.size_y > 0;
   auto wrap = [](double& v, double period) {
     if (std::abs(v) <= 0.5 * period) return;
     if (std::abs(v) <= 1.5 * period) v -= v > 0 ? period : -period;

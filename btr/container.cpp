@@ -14,4 +14,10 @@ const char* to_string(ContainerKind kind) {
   return "?";
 }
 
+bool wraps_x(const Container& c) { return c.kind == ContainerKind::Periodic; }
+
+bool wraps_y(const Container& c, int dimension) {
+  return dimension == 3 && (c.kind == ContainerKind::Periodic || (c.kind == ContainerKind::Drum && c.periodic_ends));
+}
+
 }  // namespace btr

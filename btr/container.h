@@ -7,8 +7,8 @@
 //   hele-shaw  (3D only) plates at y = +-gap/2, end walls at x = +-size_x/2
 //   cylinder   (3D only) vertical cylinder of radius `radius` about the z axis
 //   drum       horizontal cylinder of radius `radius` with its axis along y at height z = radius (its
-//              lowest line is the floor z = 0); 3D: flat end walls at y = +-size_y/2 (its length);
-//              2D: a circle of disks in the x-z plane
+//              lowest line is the floor z = 0); 3D: flat end walls at y = +-size_y/2 (its length)
+//              or, with periodic_ends, periodic in y with period size_y; 2D: a circle of disks in the x-z plane
 #include <string>
 
 namespace btr {
@@ -22,7 +22,13 @@ struct Container {
   double gap = 0.0;     // hele-shaw plate distance w [m]
   double radius = 0.0;  // cylinder, drum inner radius [m]
   double height = 0.0;  // optional wall height for the DEM stage; 0 = derived from the packing
+  bool periodic_ends = false;  // drum (3D): periodic in y with period size_y instead of flat end walls
 };
+
+// Axes along which the container wraps, with the domain [-L/2, L/2): x in a periodic container; y in a
+// 3D periodic container and in a 3D drum with periodic ends.
+bool wraps_x(const Container& container);
+bool wraps_y(const Container& container, int dimension);
 
 const char* to_string(ContainerKind kind);
 

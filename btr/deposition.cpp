@@ -560,10 +560,8 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
     throw PlacementError(id, why.str());
   }
   double px = drop.x, py = dimension == 3 ? drop.y : 0.0;
-  if (container.kind == ContainerKind::Periodic) {
-    px -= container.size_x * std::floor(px / container.size_x + 0.5);
-    if (dimension == 3) py -= container.size_y * std::floor(py / container.size_y + 0.5);
-  }
+  if (wraps_x(container)) px -= container.size_x * std::floor(px / container.size_x + 0.5);
+  if (wraps_y(container, dimension)) py -= container.size_y * std::floor(py / container.size_y + 0.5);
   const std::string misfit = drop_misfit(container, dimension, px, py, r);
   if (!misfit.empty()) throw PlacementError(id, "dropped outside the container: " + misfit);
 
@@ -710,10 +708,8 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
     if (active.n) why << ")";
     throw PlacementError(id, why.str());
   }
-  if (container.kind == ContainerKind::Periodic) {
-    x.x() -= container.size_x * std::floor(x.x() / container.size_x + 0.5);
-    if (dimension == 3) x.y() -= container.size_y * std::floor(x.y() / container.size_y + 0.5);
-  }
+  if (wraps_x(container)) x.x() -= container.size_x * std::floor(x.x() / container.size_x + 0.5);
+  if (wraps_y(container, dimension)) x.y() -= container.size_y * std::floor(x.y() / container.size_y + 0.5);
   grains.push_back(Grain{x, r, drop.species});
   grid.insert(static_cast<std::int32_t>(grains.size() - 1), x, r);
   top = std::max(top, x.z() + r);

@@ -154,9 +154,10 @@ void DropSequence::position(double r, Drop& d) {
     case SourceSpec::Kind::Rain:
       switch (c.kind) {
         case ContainerKind::Cylinder: disk(c.radius - r, d.x, d.y); break;
-        case ContainerKind::Drum:  // over the drum's width, clear of its end walls
+        case ContainerKind::Drum:  // over the drum's width, clear of its end walls (over a period of periodic ends)
           d.x = -(c.radius - r) + uniform() * 2.0 * (c.radius - r);
-          if (three) d.y = (-0.5 * c.size_y + r) + uniform() * (c.size_y - 2.0 * r);
+          if (three && c.periodic_ends) d.y = -0.5 * c.size_y + uniform() * c.size_y;
+          else if (three) d.y = (-0.5 * c.size_y + r) + uniform() * (c.size_y - 2.0 * r);
           break;
         case ContainerKind::Periodic:
           d.x = -0.5 * c.size_x + uniform() * c.size_x;
@@ -171,10 +172,8 @@ void DropSequence::position(double r, Drop& d) {
       break;
     case SourceSpec::Kind::List: break;
   }
-  if (c.kind == ContainerKind::Periodic) {
-    d.x = wrap(d.x, c.size_x);
-    if (three) d.y = wrap(d.y, c.size_y);
-  }
+  if (wraps_x(c)) d.x = wrap(d.x, c.size_x);
+  if (wraps_y(c, dimension_)) d.y = wrap(d.y, c.size_y);
   if (!three) d.y = 0.0;
 }
 

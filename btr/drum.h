@@ -27,18 +27,4 @@ class DrumStepper {
   double lift_;
 };
 
-struct DrumMeasures {
-  double split_radius = 0.0;       // grains with r <= split are "small" (the median radius)
-  double axis_small = 0.0, axis_large = 0.0;  // mean distance from the axis [m] (x-z plane)
-  double core_small = 0.0, core_large = 0.0;  // mean distance from the centre of mass [m]
-  double segregation_index = 0.0;  // (axis_large - axis_small) / radius: > 0 when small grains are inner
-  double com_x = 0.0, com_z = 0.0;  // centre of mass (volume-weighted) [m]
-  bool surface_valid = false;
-  double surface_angle_deg = 0.0;   // slope of the free surface (rising towards +x is positive)
-};
-
-// Free surface: columns one largest diameter wide over |x| <= 0.6 radius, highest grain top in each;
-// the angle is that of the least-squares line through them (needs 3 columns holding grains).
-DrumMeasures drum_measures(const Grains& grains, int dimension, const Container& container);
-
 }  // namespace btr

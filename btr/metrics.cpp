@@ -140,7 +140,6 @@ bool in_window(const Vec3& x, int dimension, const Box& w) {
 class Cells {
  public:
   Cells(const Grains& grains, int dimension, const Container& container, double width) {
-    const bool periodic = container.kind == ContainerKind::Periodic;
     Vec3 lo = Vec3::Constant(std::numeric_limits<double>::max()), hi = -lo;
     for (const Grain& g : grains) {
       lo = lo.cwiseMin(g.x);
@@ -151,7 +150,7 @@ class Cells {
     // Keep the dense cell array at most a few times the number of grains.
     for (;;) {
       for (int a = 0; a < 3; ++a) {
-        periodic_[a] = periodic && a < 2 && !(a == 1 && dimension == 2);
+        periodic_[a] = (a == 0 && wraps_x(container)) || (a == 1 && wraps_y(container, dimension));
         if (periodic_[a]) {
           period_[a] = a == 0 ? container.size_x : container.size_y;
           origin_[a] = -0.5 * period_[a];
@@ -248,6 +247,14 @@ class Cells {
   int n_[3] = {1, 1, 1};
   std::vector<std::uint32_t> start_, order_;
   std::vector<Vec3> sorted_;  // grain centres in cell order, contiguous for the neighbour loops
+};
+
+// Least-squares line y = a + b x through points added one by one.
+struct LineFit {
+  double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+  void add(double x, double y) { n += 1, sx += x, sy += y, sxx += x * x, sxy += x * y; }
+  bool ok() const { return n >= 3 && n * sxx - sx * sx > 0.0; }  // 3 points at 2 x or more
+  double slope() const { return (n * sxy - sx * sy) / (n * sxx - sx * sx); }
 };
 
 // ---------------------------------------------------------------- free surface
@@ -556,19 +563,18 @@ Flank fit_flank(const std::vector<ProfilePoint>& bins, double lo, double hi) {
   std::size_t apex = 0;
   for (std::size_t b = 0; b < bins.size(); ++b)
     if (bins[b].top > bins[apex].top) apex = b;
-  double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+  LineFit fit;
   f.foot = bins.empty() ? 0.0 : bins[apex].distance;
   for (std::size_t b = apex; b < bins.size(); ++b) {
     const ProfilePoint& p = bins[b];
     if (p.top < lo) break;  // the foot of the pile, or a gap (empty bins have top < 0)
     f.foot = p.distance;
     if (p.top > hi) continue;
-    n += 1, sx += p.distance, sy += p.top, sxx += p.distance * p.distance, sxy += p.distance * p.top;
+    fit.add(p.distance, p.top);
   }
-  f.points = static_cast<int>(n);
-  const double den = n * sxx - sx * sx;
-  if (n < 3 || !(den > 0.0)) return f;
-  f.angle = std::atan(-(n * sxy - sx * sy) / den) * 180.0 / kPi;
+  f.points = static_cast<int>(fit.n);
+  if (!fit.ok()) return f;
+  f.angle = std::atan(-fit.slope()) * 180.0 / kPi;
   f.ok = true;
   return f;
 }
@@ -681,6 +687,24 @@ RadialDistribution radial_distribution(const Grains& grains, int dimension, cons
 
 namespace {
 
+// Means of the per-grain values c over the grains marked large and those marked small.
+struct GroupMeans {
+  double large = 0.0, small = 0.0;
+  std::int64_t n_large = 0, n_small = 0;
+};
+
+GroupMeans group_means(const std::vector<double>& c, const std::vector<char>& large, const std::vector<char>& small) {
+  GroupMeans m;
+  double sl = 0, ss = 0;
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    if (large[i]) sl += c[i], ++m.n_large;
+    if (small[i]) ss += c[i], ++m.n_small;
+  }
+  if (m.n_large) m.large = sl / m.n_large;
+  if (m.n_small) m.small = ss / m.n_small;
+  return m;
+}
+
 SegregationIndex segregation_of(const Grains& grains, const std::vector<double>& c) {
   SegregationIndex s;
   std::map<int, std::pair<double, std::int64_t>> by_species;  // sum of radii, count
@@ -723,17 +747,12 @@ SegregationIndex segregation_of(const Grains& grains, const std::vector<double>&
     for (std::size_t i = 0; i < n; ++i) large[i] = r[i] > median, small[i] = r[i] <= median;
     s.basis = "radius above vs below the median";
   }
-  double sl = 0, ss = 0;
-  std::int64_t nl = 0, ns = 0;
-  for (std::size_t i = 0; i < grains.size(); ++i) {
-    if (large[i]) sl += c[i], ++nl;
-    if (small[i]) ss += c[i], ++ns;
-  }
-  if (nl == 0 || ns == 0) {
+  const GroupMeans g = group_means(c, large, small);
+  if (g.n_large == 0 || g.n_small == 0) {
     s.basis += ": one of the two groups is empty";
     return s;
   }
-  s.mean_large = sl / nl, s.mean_small = ss / ns;
+  s.mean_large = g.large, s.mean_small = g.small;
   s.index = 2.0 * (s.mean_large - s.mean_small) / (s.mean_large + s.mean_small);
   s.valid = true;
   return s;
@@ -747,14 +766,51 @@ SegregationIndex vertical_segregation(const Grains& grains) {
   return segregation_of(grains, c);
 }
 
-SegregationIndex radial_segregation(const Grains& grains, const Vec3& point, const Vec3& direction) {
+std::vector<double> axis_distances(const Grains& grains, const Vec3& point, const Vec3& direction) {
   const Vec3 u = direction.normalized();
   std::vector<double> c(grains.size());
   for (std::size_t i = 0; i < grains.size(); ++i) {
-    const Vec3 v = grains[i].x - point;
-    c[i] = (v - v.dot(u) * u).norm();
+    const Vec3 v = grains[i].x - point, w = v - v.dot(u) * u;
+    c[i] = std::hypot(std::hypot(w.x(), w.y()), w.z());  // along y: exactly hypot(x, z), the drum's distance
   }
-  return segregation_of(grains, c);
+  return c;
+}
+
+SegregationIndex radial_segregation(const Grains& grains, const Vec3& point, const Vec3& direction) {
+  return segregation_of(grains, axis_distances(grains, point, direction));
+}
+
+DrumMeasures drum_measures(const Grains& grains, int dimension, const Container& container) {
+  DrumMeasures m;
+  if (grains.empty()) return m;
+  std::vector<double> radii;
+  double w_sum = 0.0;
+  for (const Grain& g : grains) {
+    radii.push_back(g.r);
+    const double w = dimension == 3 ? g.r * g.r * g.r : g.r * g.r;
+    m.com_x += w * g.x.x(), m.com_z += w * g.x.z(), w_sum += w;
+  }
+  m.com_x /= w_sum, m.com_z /= w_sum;
+  std::nth_element(radii.begin(), radii.begin() + radii.size() / 2, radii.end());
+  m.split_radius = radii[radii.size() / 2];
+  std::vector<char> small(grains.size()), large(grains.size());
+  for (std::size_t i = 0; i < grains.size(); ++i) small[i] = grains[i].r <= m.split_radius, large[i] = !small[i];
+  const GroupMeans axis = group_means(axis_distances(grains, Vec3(0, 0, container.radius), Vec3::UnitY()), large, small);
+  const GroupMeans core = group_means(axis_distances(grains, Vec3(m.com_x, 0, m.com_z), Vec3::UnitY()), large, small);
+  m.axis_small = axis.small, m.axis_large = axis.large, m.core_small = core.small, m.core_large = core.large;
+  m.segregation_index = axis.n_small && axis.n_large ? (m.axis_large - m.axis_small) / container.radius : 0.0;
+
+  const double half = 0.6 * container.radius;
+  const HeightMap h = height_map(grains, 2, -half, half, 0.0, 0.0, 2.0 * max_radius(grains), 1 << 20);
+  LineFit fit;
+  const double wx = 2.0 * half / h.nx;
+  for (int k = 0; k < h.nx; ++k)
+    if (h.top[k] > 0.0) fit.add(-half + (k + 0.5) * wx, h.top[k]);
+  if (fit.ok()) {
+    m.surface_valid = true;
+    m.surface_angle_deg = std::atan(fit.slope()) * 180.0 / kPi;
+  }
+  return m;
 }
 
 std::vector<double> surface_depth(const Grains& grains, int dimension) {

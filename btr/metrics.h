@@ -1,8 +1,9 @@
 #pragma once
 // The structural measures of a packing (DESIGN.md section 5), the one place each is defined: the bulk
 // window, packing fraction, coordination and its histogram, g(r), the free-surface profile and the heap
-// angle, segregation indices and heights. `btr deposit`, `btr relax` and `btr measure` (which the
-// Python workflows call) all take their numbers from here; measure_packing() gathers them.
+// angle, segregation indices, heights, and the rotating drum's per-step measures. `btr deposit`, `btr
+// relax`, `btr measure` (which the Python workflows call) and `btr drum` all take their numbers from
+// here; measure_packing() gathers them.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -127,6 +128,25 @@ SegregationIndex vertical_segregation(const Grains& grains);
 // Radial size segregation about an axis through `point` along `direction` (a drum): c = distance of the
 // centre from the axis (in 2D pass direction (0, 1, 0): the distance from the point in the x-z plane).
 SegregationIndex radial_segregation(const Grains& grains, const Vec3& point, const Vec3& direction);
+
+// Per grain: distance of the centre from the axis through `point` along `direction` (2D drums: direction
+// (0, 1, 0), the distance in the x-z plane).
+std::vector<double> axis_distances(const Grains& grains, const Vec3& point, const Vec3& direction);
+
+// The rotating drum's per-step measures (container.kind = drum, axis along y at z = radius).
+struct DrumMeasures {
+  double split_radius = 0.0;       // grains with r <= split are "small" (the upper median radius)
+  double axis_small = 0.0, axis_large = 0.0;  // mean distance from the axis [m] (x-z plane)
+  double core_small = 0.0, core_large = 0.0;  // mean distance from the centre of mass [m]
+  double segregation_index = 0.0;  // (axis_large - axis_small) / radius: > 0 when small grains are inner
+  double com_x = 0.0, com_z = 0.0;  // centre of mass (volume-weighted) [m]
+  bool surface_valid = false;
+  double surface_angle_deg = 0.0;   // slope of the free surface (rising towards +x is positive)
+};
+
+// Free surface: columns one largest diameter wide over |x| <= 0.6 radius, highest grain top in each;
+// the angle is that of the least-squares line through them (needs 3 columns holding grains).
+DrumMeasures drum_measures(const Grains& grains, int dimension, const Container& container);
 
 // Per grain: how far its centre lies below the free surface over it (the highest grain top among the
 // grains centred in its column, columns one largest diameter wide), in m.

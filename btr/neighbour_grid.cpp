@@ -6,12 +6,12 @@
 namespace btr {
 
 NeighbourGrid::NeighbourGrid(int dimension, const Container& c, double r_max)
-    : dimension_(dimension), periodic_(c.kind == ContainerKind::Periodic), grows_(c.kind == ContainerKind::Open),
+    : dimension_(dimension), wrap_x_(wraps_x(c)), wrap_y_(wraps_y(c, dimension)), grows_(c.kind == ContainerKind::Open),
       h_(2.0 * r_max) {
   hx_ = hy_ = h_;
-  auto span = [&](double length, double& origin, long& n, double& width) {
+  auto span = [&](double length, double& origin, long& n, double& width, bool periodic) {
     origin = -0.5 * length;
-    if (periodic_) {
+    if (periodic) {
       n = std::max(1L, static_cast<long>(std::floor(length / h_)));
       width = length / n;
     } else {
@@ -26,23 +26,24 @@ NeighbourGrid::NeighbourGrid(int dimension, const Container& c, double r_max)
       break;
     case ContainerKind::Box:
     case ContainerKind::Periodic:
-      span(c.size_x, x0_, nx_, hx_);
-      if (dimension == 3) span(c.size_y, y0_, ny_, hy_);
+      span(c.size_x, x0_, nx_, hx_, wrap_x_);
+      if (dimension == 3) span(c.size_y, y0_, ny_, hy_, wrap_y_);
       else { y0_ = 0.0; ny_ = 1; }
       period_x_ = c.size_x;
       period_y_ = dimension == 3 ? c.size_y : 0.0;
       break;
     case ContainerKind::HeleShaw:
-      span(c.size_x, x0_, nx_, hx_);
-      span(c.gap, y0_, ny_, hy_);
+      span(c.size_x, x0_, nx_, hx_, wrap_x_);
+      span(c.gap, y0_, ny_, hy_, false);
       break;
     case ContainerKind::Cylinder:
-      span(2.0 * c.radius, x0_, nx_, hx_);
-      span(2.0 * c.radius, y0_, ny_, hy_);
+      span(2.0 * c.radius, x0_, nx_, hx_, false);
+      span(2.0 * c.radius, y0_, ny_, hy_, false);
       break;
     case ContainerKind::Drum:
-      span(2.0 * c.radius, x0_, nx_, hx_);
-      if (dimension == 3) span(c.size_y, y0_, ny_, hy_);
+      span(2.0 * c.radius, x0_, nx_, hx_, false);
+      if (dimension == 3) span(c.size_y, y0_, ny_, hy_, wrap_y_);
+      period_y_ = wrap_y_ ? c.size_y : 0.0;
       break;
   }
   if (dimension == 2) { y0_ = -0.5 * h_; iy0_ = 0; ny_ = 1; hy_ = h_; }
@@ -63,7 +64,7 @@ void NeighbourGrid::grow_to(long ix, long iy) {
   while (ix < new_ix0 || ix >= new_ix0 + new_nx) { new_ix0 -= new_nx / 2; new_nx *= 2; }
   if (dimension_ == 3)
     while (iy < new_iy0 || iy >= new_iy0 + new_ny) { new_iy0 -= new_ny / 2; new_ny *= 2; }
-  std::vector<std::vector<Cell>> grown(static_cast<std::size_t>(new_nx * new_ny));
+  std::vector<Column> grown(static_cast<std::size_t>(new_nx * new_ny));
   for (long y = iy0_; y < iy0_ + ny_; ++y)
     for (long x = ix0_; x < ix0_ + nx_; ++x)
       grown[(x - new_ix0) + new_nx * (y - new_iy0)] = std::move(columns_[column_of(x, y)]);
@@ -74,19 +75,23 @@ void NeighbourGrid::grow_to(long ix, long iy) {
 void NeighbourGrid::insert(std::int32_t index, const Vec3& x, double r) {
   long ix = static_cast<long>(std::floor((x.x() - x0_) / hx_));
   long iy = dimension_ == 3 ? static_cast<long>(std::floor((x.y() - y0_) / hy_)) : 0;
-  if (periodic_) {
-    ix -= floor_div(ix, nx_) * nx_;
-    if (dimension_ == 3) iy -= floor_div(iy, ny_) * ny_;
-  } else if (grows_) {
+  if (grows_) {
     if (ix < ix0_ || ix >= ix0_ + nx_ || iy < iy0_ || iy >= iy0_ + ny_) grow_to(ix, iy);
   } else {
-    ix = std::clamp(ix, ix0_, ix0_ + nx_ - 1);  // a centre on the wall's cell edge: round-off only
-    iy = std::clamp(iy, iy0_, iy0_ + ny_ - 1);
+    // A centre on a wall's cell edge is outside by round-off only.
+    ix = wrap_x_ ? ix - floor_div(ix, nx_) * nx_ : std::clamp(ix, ix0_, ix0_ + nx_ - 1);
+    iy = wrap_y_ ? iy - floor_div(iy, ny_) * ny_ : std::clamp(iy, iy0_, iy0_ + ny_ - 1);
   }
   const long iz = std::max(0L, static_cast<long>(std::floor(x.z() / h_)));
-  auto& column = columns_[column_of(ix, iy)];
-  if (static_cast<long>(column.size()) <= iz) column.resize(iz + 1);
-  column[iz].push_back(Entry{x.x(), x.y(), x.z(), r, index});
+  Column& column = columns_[column_of(ix, iy)];
+  if (column.start.empty()) column.start.push_back(0);
+  if (column.layers() <= iz) {
+    const std::uint32_t end = column.start.back();  // a copy: resize may move the storage
+    column.start.resize(static_cast<std::size_t>(iz) + 2, end);
+  }
+  // At the end of layer iz; the layers above (usually none: grains mostly land on top) move up by one.
+  column.entries.insert(column.entries.begin() + column.start[iz + 1], Entry{x.x(), x.y(), x.z(), r, index});
+  for (std::size_t k = static_cast<std::size_t>(iz) + 1; k < column.start.size(); ++k) ++column.start[k];
 }
 
 }  // namespace btr

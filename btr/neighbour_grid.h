@@ -1,7 +1,7 @@
 #pragma once
 // Uniform grid over x-y columns and height, with cells at least one largest diameter wide, so the
 // grains near a point are found in a constant number of cells whatever the number already placed.
-// Periodic containers wrap columns and report each grain with the shift of the image found.
+// Periodic axes (a periodic container, a drum's periodic ends) wrap columns and report each grain with the shift of the image found.
 // An open floor has no footprint: the grid grows as the heap spreads.
 #include <cmath>
 #include <cstdint>
@@ -42,7 +42,7 @@ class NeighbourGrid {
   void visit_cell_range(Range rx, Range ry, long iz_lo, long iz_hi, F&& f) const;
 
   int dimension_;
-  bool periodic_;
+  bool wrap_x_, wrap_y_;  // periodic axes (wraps_x, wraps_y of the container)
   bool grows_;       // open floor: the footprint is unknown in advance
   double h_;         // cell height and nominal width
   double hx_, hy_;   // cell widths (periodic: the period divided into whole cells)
@@ -55,29 +55,57 @@ class NeighbourGrid {
     double x, y, z, r;
     std::int32_t index;
   };
-  using Cell = std::vector<Entry>;
-  std::vector<std::vector<Cell>> columns_;  // per column, per layer
+  // The cells of one column stored contiguously, layer after layer, each in insertion order: a query
+  // over a run of layers reads one block of memory instead of one heap block per cell.
+  struct Column {
+    std::vector<std::uint32_t> start;  // layer iz holds entries [start[iz], start[iz + 1]); empty: no layer
+    std::vector<Entry> entries;
+    long layers() const { return start.empty() ? 0 : static_cast<long>(start.size()) - 1; }
+  };
+  std::vector<Column> columns_;
 };
 
 template <class F>
 void NeighbourGrid::visit_cell_range(Range rx, Range ry, long iz_lo, long iz_hi, F&& f) const {
+  // First gather the runs of entries of every column and ask for their first cache lines, so the memory
+  // loads overlap; then visit them in the same order (column by column, layer by layer).
+  struct Run {
+    const Entry *begin, *end;
+    double sx, sy;
+    int image;
+  };
+  constexpr int kBatch = 32;
+  Run runs[kBatch];
+  int n = 0;
+  auto flush = [&] {
+    for (int k = 0; k < n; ++k) {
+      const Run& run = runs[k];
+      for (const Entry* e = run.begin; e != run.end; ++e)
+        f(e->index, Vec3(e->x + run.sx, e->y + run.sy, e->z), e->r, run.image);
+    }
+    n = 0;
+  };
   for (long iy = ry.lo; iy <= ry.hi; ++iy) {
     long wy = iy, ky = 0;
-    if (periodic_ && dimension_ == 3) { ky = floor_div(iy, ny_); wy = iy - ky * ny_; }
+    if (wrap_y_) { ky = floor_div(iy, ny_); wy = iy - ky * ny_; }
     else if (iy < iy0_ || iy >= iy0_ + ny_) continue;
     for (long ix = rx.lo; ix <= rx.hi; ++ix) {
       long wx = ix, kx = 0;
-      if (periodic_) { kx = floor_div(ix, nx_); wx = ix - kx * nx_; }
+      if (wrap_x_) { kx = floor_div(ix, nx_); wx = ix - kx * nx_; }
       else if (ix < ix0_ || ix >= ix0_ + nx_) continue;
-      const auto& column = columns_[column_of(wx, wy)];
-      const long top = std::min<long>(iz_hi, static_cast<long>(column.size()) - 1);
-      if (top < iz_lo) continue;
-      const double sx = kx * period_x_, sy = ky * period_y_;
-      const int image = static_cast<int>((kx + 4) * 9 + (ky + 4));
-      for (long iz = std::max(0L, iz_lo); iz <= top; ++iz)
-        for (const Entry& e : column[iz]) f(e.index, Vec3(e.x + sx, e.y + sy, e.z), e.r, image);
+      const Column& column = columns_[column_of(wx, wy)];
+      const long top = std::min<long>(iz_hi, column.layers() - 1), bottom = std::max(0L, iz_lo);
+      if (top < bottom) continue;
+      const Entry* begin = column.entries.data() + column.start[bottom];
+      const Entry* end = column.entries.data() + column.start[top + 1];
+      if (begin == end) continue;
+      __builtin_prefetch(begin);
+      __builtin_prefetch(reinterpret_cast<const char*>(begin) + 64);
+      runs[n++] = Run{begin, end, kx * period_x_, ky * period_y_, static_cast<int>((kx + 4) * 9 + (ky + 4))};
+      if (n == kBatch) flush();
     }
   }
+  flush();
 }
 
 template <class F>
@@ -93,13 +121,13 @@ void NeighbourGrid::visit_column_down(double x, double y, double reach, double z
   long top = -1;
   for (long iy = ry.lo; iy <= ry.hi; ++iy) {
     long wy = iy;
-    if (periodic_ && dimension_ == 3) wy = iy - floor_div(iy, ny_) * ny_;
+    if (wrap_y_) wy = iy - floor_div(iy, ny_) * ny_;
     else if (iy < iy0_ || iy >= iy0_ + ny_) continue;
     for (long ix = rx.lo; ix <= rx.hi; ++ix) {
       long wx = ix;
-      if (periodic_) wx = ix - floor_div(ix, nx_) * nx_;
+      if (wrap_x_) wx = ix - floor_div(ix, nx_) * nx_;
       else if (ix < ix0_ || ix >= ix0_ + nx_) continue;
-      top = std::max<long>(top, static_cast<long>(columns_[column_of(wx, wy)].size()) - 1);
+      top = std::max<long>(top, columns_[column_of(wx, wy)].layers() - 1);
     }
   }
   top = std::min<long>(top, static_cast<long>(std::floor(z_start / h_)));

@@ -286,7 +286,7 @@ class SceneParser {
   }
 
   void parse_container(const Section& s) {
-    rd_.check_keys(s, {"kind", "size", "gap", "radius", "height", "length"});
+    rd_.check_keys(s, {"kind", "size", "gap", "radius", "height", "length", "ends"});
     Container& c = scene_.container;
     const std::string kind =
         rd_.required_choice(s, "kind", {"open", "box", "periodic", "hele-shaw", "cylinder", "drum"});
@@ -305,9 +305,16 @@ class SceneParser {
     if (kind != "hele-shaw") rd_.forbid(s, "gap", why + " (only hele-shaw has a gap)");
     if (kind != "cylinder" && kind != "drum") rd_.forbid(s, "radius", why + " (only cylinder and drum have a radius)");
     if (kind != "drum" || dim() == 2) rd_.forbid(s, "length", why + (dim() == 2 ? " in 2D" : "") + " (only a 3D drum has a length)");
+    if (kind != "drum" || dim() == 2)
+      rd_.forbid(s, "ends", why + (dim() == 2 ? " in 2D" : "") + " (only a 3D drum has ends)");
     if (kind == "drum") {
       c.radius = rd_.required_number(s, "radius", positive, "a positive drum radius [m]");
-      if (dim() == 3) c.size_y = rd_.required_number(s, "length", positive, "a positive drum length [m] (end walls at y = +-length/2)");
+      if (dim() == 3) {
+        c.periodic_ends = rd_.choice(s, "ends", {"walls", "periodic"}).value_or("walls") == "periodic";
+        c.size_y = rd_.required_number(s, "length", positive,
+                                       c.periodic_ends ? "a positive drum length [m] (the period along the axis)"
+                                                       : "a positive drum length [m] (end walls at y = +-length/2)");
+      }
     }
     if (kind == "box" || kind == "periodic" || kind == "hele-shaw") {
       const std::size_t n = (kind == "hele-shaw" || dim() == 2) ? 1 : 2;
@@ -450,7 +457,7 @@ class SceneParser {
       case ContainerKind::Box: return {c.size_x / 2 - r, c.size_y / 2 - r};
       case ContainerKind::Periodic: return {c.size_x / 2, c.size_y / 2};
       case ContainerKind::HeleShaw: return {c.size_x / 2 - r, c.gap / 2 - r};
-      case ContainerKind::Drum: return {c.radius - r, c.size_y / 2 - r};
+      case ContainerKind::Drum: return {c.radius - r, c.periodic_ends ? c.size_y / 2 : c.size_y / 2 - r};
       default: return {inf, inf};
     }
   }
@@ -468,9 +475,10 @@ class SceneParser {
   bool disk_fits(double x, double y, double spread, double r) const {
     const Container& c = scene_.container;
     if (c.kind == ContainerKind::Cylinder) return std::hypot(x, y) + spread <= c.radius - r;
-    if (c.kind == ContainerKind::Periodic) spread = 0.0;  // drops wrap around
     auto [bx, by] = centre_band(r);
-    return std::abs(x) + spread <= bx && (dim() == 2 || std::abs(y) + spread <= by);
+    // Drops wrap around a periodic axis.
+    return std::abs(x) + (wraps_x(c) ? 0.0 : spread) <= bx &&
+           (dim() == 2 || std::abs(y) + (wraps_y(c, dim()) ? 0.0 : spread) <= by);
   }
 
   bool rect_fits(const SourceSpec& s, double r) const {

@@ -50,7 +50,7 @@ void container_walls(const Container& c, int dimension, double r, std::vector<Ob
     }
     case ContainerKind::Drum: {
       // The floor z = r stays walls[0]: it touches the drum's centre surface only on its lowest line.
-      if (dimension == 3) y_walls(0.5 * c.size_y);
+      if (dimension == 3 && !c.periodic_ends) y_walls(0.5 * c.size_y);
       Obstacle o;
       o.kind = Obstacle::Kind::Drum;
       o.key = -7;
@@ -89,7 +89,7 @@ std::string drop_misfit(const Container& c, int dimension, double x, double y, d
     case ContainerKind::Drum:
       if (std::abs(x) > c.radius - r + slack)
         why << "x = " << x << " puts a grain of radius " << r << " through the drum of radius " << c.radius << "; ";
-      if (dimension == 3) check(y, 0.5 * c.size_y, "y");
+      if (dimension == 3 && !c.periodic_ends) check(y, 0.5 * c.size_y, "y");
       break;
   }
   return why.str();

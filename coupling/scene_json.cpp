@@ -155,6 +155,9 @@ json scene_core_to_json(const Scene& s);
 
 json scene_to_json(const Scene& s) {
   json out = scene_core_to_json(s);
+  // Only drums have ends (3D); other containers' JSON is unchanged.
+  if (s.container.kind == ContainerKind::Drum && s.dimension == 3)
+    out["container"]["ends"] = s.container.periodic_ends ? "periodic" : "walls";
   if (s.intruder)
     out["intruder"] = {{"diameter_ratio", s.intruder->diameter_ratio},
                        {"x", s.intruder->x},
@@ -259,7 +262,7 @@ Scene scene_from_json(const json& j, const std::string& origin) {
     s.grains.components.push_back(c);
   }
 
-  const json& c = rd.object(j, "", "container", {"kind", "size_x", "size_y", "gap", "radius", "height"});
+  const json& c = rd.object(j, "", "container", {"kind", "size_x", "size_y", "gap", "radius", "height", "ends"});
   std::string kind = rd.string(c, "container", "kind");
   bool found = false;
   for (ContainerKind k : {ContainerKind::Open, ContainerKind::Box, ContainerKind::Periodic, ContainerKind::HeleShaw,
@@ -271,6 +274,13 @@ Scene scene_from_json(const json& j, const std::string& origin) {
   s.container.gap = rd.number(c, "container", "gap");
   s.container.radius = rd.number(c, "container", "radius");
   s.container.height = rd.number(c, "container", "height");
+  if (c.contains("ends")) {
+    const std::string ends = rd.string(c, "container", "ends");
+    if (s.container.kind != ContainerKind::Drum || (ends != "walls" && ends != "periodic"))
+      rd.fail("container.ends", "expected \"walls\" or \"periodic\" in a drum container, got '" + ends + "' in a " +
+                                    to_string(s.container.kind) + " container");
+    s.container.periodic_ends = ends == "periodic";
+  }
 
   const json& src =
       rd.object(j, "", "source", {"kind", "x", "y", "scatter", "x_min", "x_max", "y_min", "y_max", "file"});

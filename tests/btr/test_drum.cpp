@@ -7,6 +7,7 @@
 #include "btr/check.h"
 #include "btr/deposition.h"
 #include "btr/drum.h"
+#include "btr/metrics.h"
 
 namespace btr {
 namespace {
@@ -16,6 +17,12 @@ Container drum(double R, double length = 0.0) {
   c.kind = ContainerKind::Drum;
   c.radius = R;
   c.size_y = length;
+  return c;
+}
+
+Container periodic_drum(double R, double length) {
+  Container c = drum(R, length);
+  c.periodic_ends = true;
   return c;
 }
 
@@ -82,6 +89,86 @@ TEST(DrumWall, EndWallHoldsTheSphere3D) {
   EXPECT_NEAR(p.z(), 1.0, 1e-9);
   EXPECT_THROW(dep.place(Drop{3.0, 1.5, 1.0, 1}), PlacementError);  // through the end wall
   EXPECT_THROW(dep.place(Drop{9.5, 0.0, 1.0, 1}), PlacementError);  // through the drum wall
+}
+
+// 3D periodic ends: no end wall; a drop beyond y = L/2 wraps to the other end; a sphere close to an end
+// rests there on the lowest line, which flat end walls would refuse.
+TEST(DrumPeriodicEnds, NoEndWallAndDropsWrap3D) {
+  const Container c = periodic_drum(10.0, 4.0);
+  Deposition dep(3, c, 1.0);
+  const Vec3 p = dep.place(Drop{3.0, 1.8, 1.0, 1}).x;  // |y| > L/2 - r: through an end wall if it had one
+  EXPECT_NEAR(p.x(), 0.0, 1e-9);
+  EXPECT_NEAR(p.y(), 1.8, 1e-12);
+  EXPECT_NEAR(p.z(), 1.0, 1e-9);
+  Deposition lone(3, c, 1.0);
+  EXPECT_NEAR(lone.place(Drop{0.0, 2.5, 1.0, 1}).x.y(), -1.5, 1e-12);  // y = L/2 + 0.5 -> -L/2 + 0.5
+  Deposition walled(3, drum(10.0, 4.0), 1.0);
+  EXPECT_THROW(walled.place(Drop{3.0, 1.8, 1.0, 1}), PlacementError);
+}
+
+// 3D: A lies on the lowest line next to the end y = +L/2; B comes down the drum wall just past the
+// other end, 1 from A's periodic image in y, meets the image and rolls along the wall and the image to
+// the lowest line, as in the walled case: y_B = y_A + 2 sqrt(r_A r_B), wrapped into [-L/2, L/2).
+TEST(DrumPeriodicEnds, SphereRestsAgainstTheImageAcrossTheEnd3D) {
+  const double R = 10.0, L = 12.0, ra = 1.5, rb = 1.0;
+  const Container c = periodic_drum(R, L);
+  Deposition dep(3, c, ra);
+  const Vec3 a = dep.place(Drop{0.0, 5.5, ra, 1}).x;
+  ASSERT_NEAR(a.z(), ra, 1e-12);
+  const Vec3 b = dep.place(Drop{5.0, -5.5, rb, 1}).x;  // 1 from A's image at y = 5.5 - 12
+  const double y = 5.5 + 2.0 * std::sqrt(ra * rb) - L;
+  EXPECT_NEAR(b.x(), 0.0, 1e-7);
+  EXPECT_NEAR(b.z(), rb, 1e-7);
+  EXPECT_NEAR(b.y(), y, 1e-6);
+  EXPECT_TRUE(check_packing(dep.grains(), 3, c).ok());
+  // With end walls A pokes through the wall at y = +6.
+  EXPECT_GE(check_packing(dep.grains(), 3, drum(R, L)).outside, 1);
+}
+
+// The self-check wraps the drum's periodic ends: two spheres on the lowest line at opposite ends
+// overlap through the period, and a sphere resting on one of them across the end is supported.
+TEST(DrumPeriodicEnds, CheckWrapsTheAxis3D) {
+  const Container c = periodic_drum(10.0, 8.0);
+  Grains apart = {{Vec3(0, 3.5, 1.0), 1.0, 1}, {Vec3(0, -3.5, 1.0), 1.0, 1}};  // 1 apart through the end
+  EXPECT_GE(check_packing(apart, 3, c).overlaps, 1);
+  Grains touching = {{Vec3(0, 3.0, 1.0), 1.0, 1}, {Vec3(0, -3.0, 1.0), 1.0, 1}};  // 2 apart: contact
+  EXPECT_TRUE(check_packing(touching, 3, c).ok());
+  // Three spheres on the lowest line in a row of touching spheres, period 6: each touches both others;
+  // a fourth on top of two of them across the end (x = 0, y = 3 = -3, z = 1 + sqrt(3)) rests there.
+  const Container p6 = periodic_drum(10.0, 6.0);
+  Grains row = {{Vec3(0, -2.0, 1.0), 1.0, 1}, {Vec3(0, 0.0, 1.0), 1.0, 1}, {Vec3(0, 2.0, 1.0), 1.0, 1},
+                {Vec3(0, -3.0, 1.0 + std::sqrt(3.0)), 1.0, 1}};
+  const CheckReport rep = check_packing(row, 3, p6);
+  EXPECT_TRUE(rep.ok()) << rep.overlaps << " overlaps, " << rep.unsupported << " unsupported";
+  // The same top sphere with end walls at +-3 has a single grain below it (and touches the wall).
+  const CheckReport walled = check_packing(row, 3, drum(10.0, 6.0));
+  EXPECT_GE(walled.unsupported + walled.outside, 1);
+}
+
+// Drum steps with periodic ends keep every grain valid and inside [-L/2, L/2), and are deterministic.
+TEST(DrumPeriodicEnds, StepsKeepPackingsValid3D) {
+  const Container c = periodic_drum(6.0, 3.0);
+  DrumStepper stepper(3, c, 0.6);
+  Deposition dep(3, c, 0.5);
+  for (int i = 0; i < 150; ++i)
+    dep.place(Drop{-4.5 + 0.06 * i, -1.5 + 0.37 * i, i % 3 ? 0.3 : 0.5, i % 3 ? 1 : 2});
+  Grains g = dep.grains();
+  ASSERT_TRUE(check_packing(g, 3, c).ok());
+  bool near_end = false;
+  for (int s = 0; s < 5; ++s) {
+    g = stepper.step(g, 2.0 * M_PI / 20.0);
+    const CheckReport rep = check_packing(g, 3, c);
+    ASSERT_TRUE(rep.ok()) << "step " << s << ": " << rep.overlaps << " overlaps, " << rep.unsupported
+                          << " unsupported, " << rep.outside << " outside";
+    for (const Grain& x : g) {
+      ASSERT_GE(x.x.y(), -1.5);
+      ASSERT_LT(x.x.y(), 1.5);
+      near_end = near_end || std::abs(x.x.y()) > 1.5 - x.r;  // would be through an end wall
+    }
+  }
+  EXPECT_TRUE(near_end);
+  const Grains a = stepper.step(g, 0.05), b = stepper.step(g, 0.05);
+  for (std::size_t i = 0; i < a.size(); ++i) ASSERT_EQ(a[i].x, b[i].x);
 }
 
 // The self-check's drum geometry is its own: a grain touching the wall is supported there, one pushed

@@ -429,6 +429,17 @@ TEST(Segregation, VerticalAndRadialIndicesOfKnownArrangements) {
   EXPECT_NEAR(s.mean_small, 1.0, 1e-12);
 }
 
+// Distances from an oblique axis (through (1, 2, 3) along (1, 1, 0)) by hand: a point on the axis, one
+// moved 2 along z off it, and one moved along (1, -1, 0) by sqrt(2) off it.
+TEST(AxisDistances, HandCases) {
+  const Grains g = {grain(4, 5, 3, 0.1), grain(-1, 0, 5, 0.1), grain(2, 1, 3, 0.1)};
+  const std::vector<double> d = axis_distances(g, Vec3(1, 2, 3), Vec3(1, 1, 0));
+  ASSERT_EQ(d.size(), 3u);
+  EXPECT_NEAR(d[0], 0.0, 1e-12);
+  EXPECT_NEAR(d[1], 2.0, 1e-12);
+  EXPECT_NEAR(d[2], std::sqrt(2.0), 1e-12);
+}
+
 TEST(SurfaceDepth, DepthBelowTheTopOfEachColumn) {
   Grains g;
   column(g, 0.0, 0.0, 0.02, 1e-3);  // 10 grains, top at 0.02

@@ -138,7 +138,7 @@ TEST(SceneInputs, MixtureAndListScenesAreReadAsWritten) {
 TEST_F(SceneFile, UnknownKeyNamesFileLineAndAllowedKeys) {
   const std::string text = replace(kBase, "size = [0.02, 0.02]", "sise = [0.02, 0.02]");
   EXPECT_EQ(error_of(text),
-            at(text, "sise") + "unknown key 'sise' in [container]; allowed: kind, size, gap, radius, height, length");
+            at(text, "sise") + "unknown key 'sise' in [container]; allowed: kind, size, gap, radius, height, length, ends");
 }
 
 TEST_F(SceneFile, UnknownKeyInsideAnInlineTable) {
@@ -211,6 +211,31 @@ TEST_F(SceneFile, CylinderIn2D) {
   EXPECT_EQ(error_of(text), at(text, "\"cylinder\"") +
                                 "container.kind: expected \"open\", \"box\" or \"periodic\" for dimension 2 "
                                 "(cylinder is 3D only), got \"cylinder\"");
+}
+
+// A drum's ends: "walls" (the default) or "periodic", in 3D only; anything else names the key and line.
+TEST_F(SceneFile, DrumEndsAreReadAndChecked) {
+  const std::string drum = replace(kBase, "kind = \"box\"\nsize = [0.02, 0.02]",
+                                   "kind = \"drum\"\nradius = 0.01\nlength = 0.01");
+  path_ = write("x.toml", drum);
+  EXPECT_FALSE(load_scene(path_).container.periodic_ends);
+  const std::string periodic = replace(drum, "length = 0.01", "length = 0.01\nends = \"periodic\"");
+  path_ = write("x.toml", periodic);
+  EXPECT_TRUE(load_scene(path_).container.periodic_ends);
+  const std::string walls = replace(drum, "length = 0.01", "length = 0.01\nends = \"walls\"");
+  path_ = write("x.toml", walls);
+  EXPECT_FALSE(load_scene(path_).container.periodic_ends);
+
+  const std::string open_ends = replace(drum, "length = 0.01", "length = 0.01\nends = \"open\"");
+  EXPECT_EQ(error_of(open_ends), at(open_ends, "ends") +
+                                     "container.ends: expected one of \"walls\", \"periodic\", got the string \"open\"");
+  const std::string in_box = replace(kBase, "size = [0.02, 0.02]", "size = [0.02, 0.02]\nends = \"periodic\"");
+  EXPECT_EQ(error_of(in_box),
+            at(in_box, "ends") + "container.ends: not used by kind = \"box\" (only a 3D drum has ends)");
+  std::string in_2d = replace(kBase, "dimension = 3", "dimension = 2");
+  in_2d = replace(in_2d, "kind = \"box\"\nsize = [0.02, 0.02]", "kind = \"drum\"\nradius = 0.01\nends = \"periodic\"");
+  EXPECT_EQ(error_of(in_2d),
+            at(in_2d, "ends") + "container.ends: not used by kind = \"drum\" in 2D (only a 3D drum has ends)");
 }
 
 TEST_F(SceneFile, SizeVectorOfTheWrongLength) {

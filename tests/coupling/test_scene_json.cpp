@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "btr/scene_toml.h"
+#include "coupling/dem_walls.h"
 #include "coupling/scene_json.h"
 
 namespace btr {
@@ -137,6 +138,43 @@ TEST(SceneJson, ErrorsNameTheOriginAndTheKey) {
   j = good;
   j["dimension"] = 4;
   EXPECT_NE(error_of(j).find("'dimension': expected 2 or 3"), std::string::npos) << error_of(j);
+}
+
+}  // namespace
+}  // namespace btr
+
+namespace btr {
+namespace {
+
+// A drum's ends survive the JSON (a reader that dropped them would read "walls" back), are refused on
+// another container, and the DEM export of a drum names its ends when it refuses.
+TEST(SceneJson, DrumEndsRoundTripAndDemExportIsRefused) {
+  Scene s = load_scene(std::string(BTR_SOURCE_DIR) + "/inputs/drum3d_periodic.toml");
+  ASSERT_TRUE(s.container.periodic_ends);
+  nlohmann::json j = scene_to_json(s);
+  EXPECT_EQ(j["container"]["ends"], "periodic");
+  EXPECT_TRUE(scene_from_json(j, "p.json").container.periodic_ends);
+  j["container"]["ends"] = "walls";
+  EXPECT_FALSE(scene_from_json(j, "p.json").container.periodic_ends);
+  j["container"]["ends"] = "open";
+  EXPECT_NE(error_of(j).find("'container.ends': expected \"walls\" or \"periodic\""), std::string::npos) << error_of(j);
+  nlohmann::json box = scene_to_json(everything_set());
+  EXPECT_FALSE(box["container"].contains("ends"));
+  box["container"]["ends"] = "periodic";
+  EXPECT_NE(error_of(box).find("in a hele-shaw container"), std::string::npos) << error_of(box);
+
+  for (bool periodic : {true, false}) {
+    s.container.periodic_ends = periodic;
+    try {
+      dem_walls(s.container, 3);
+      ADD_FAILURE() << "a drum was exported";
+    } catch (const std::runtime_error& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find(periodic ? "container 'drum' (periodic ends)" : "container 'drum' (flat end walls)"),
+                std::string::npos) << msg;
+      EXPECT_NE(msg.find("not supported"), std::string::npos) << msg;
+    }
+  }
 }
 
 }  // namespace
