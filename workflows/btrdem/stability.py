@@ -276,7 +276,7 @@ def find_edge(probe, iterations: int, max_multiple: float = MAX_MULTIPLE) -> dic
 def run_stability(outdir=None, engines=("liggghts", "yade"), tiny: bool = False, full: bool = False, ranks: int = 1,
                   progress=print, cases: list | None = None) -> dict:
     btr = find_btr()
-    outdir = Path(outdir) if outdir else REPO / "out" / "stability"
+    outdir = (Path(outdir) if outdir else REPO / "out" / "stability").resolve()
     iterations = 1 if tiny else (4 if full else 2)
     window = 1500 if tiny else (8000 if full else 3000)
     time_limit = 60.0 if tiny else 240.0
