@@ -33,7 +33,7 @@ def rest(btr_binary, csv, engine, out, max_time=0.05):
 
 def test_force_timestep_is_hidden_forced_and_recorded(tmp_path, btr_binary, liggghts):
     help_text = subprocess.run([btr_binary, "relax", "--help"], capture_output=True, text=True).stdout
-    assert "--timestep" in help_text and "force" not in help_text
+    assert "--timestep" in help_text and "--force-timestep" not in help_text
     csv = tiny_case(tmp_path, btr_binary, "base")
     run, (verdict, reason, _) = rest(btr_binary, csv, "liggghts", tmp_path / "rule", max_time=0.02)
     assert verdict == "stable", reason
@@ -64,8 +64,8 @@ def test_forced_step_blows_up_and_rule_step_is_stable(tmp_path, btr_binary, ligg
     assert verdict == "stable", reason
     assert info["overlap"]["largest"] < st.OVERLAP_BOUND
     dt = run["stable_step"]
-    out = tmp_path / "x40"
-    forced = st.relax_once(btr_binary, csv, engine, out, 1500 * dt, forced=40 * dt, time_limit=120,
+    out = tmp_path / "x20"
+    forced = st.relax_once(btr_binary, csv, engine, out, 1500 * dt, forced=20 * dt, time_limit=120,
                            progress=lambda m: None)
     assert forced["rc"] == 5, forced
     why = st.classify(forced["error"])
