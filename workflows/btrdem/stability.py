@@ -338,10 +338,17 @@ def run_stability(outdir=None, engines=("liggghts", "yade"), tiny: bool = False,
                     ref_ov = info["overlap"]["largest"]
                 dt = rest["stable_step"]
 
-                def probe(m, edir=edir, c=c, dt=dt, ref_ke=ref_ke, ref_ov=ref_ov, engine=engine):
+                first_wall = []
+
+                def probe(m, edir=edir, c=c, dt=dt, ref_ke=ref_ke, ref_ov=ref_ov, engine=engine, first_wall=first_wall):
+                    # A probe has at most as many steps as the first one; YADE can hang after a blow-up (its
+                    # collider), so a probe is killed at 4x the first probe's wall time (at least 20 s).
+                    limit = max(20.0, 4.0 * first_wall[0]) if first_wall else time_limit
                     d = edir / f"forced_x{m:.4g}"
-                    r = relax_once(btr, c["csv"], engine, d, window * dt, forced=m * dt, time_limit=time_limit,
+                    r = relax_once(btr, c["csv"], engine, d, window * dt, forced=m * dt, time_limit=limit,
                                    label=f"x{m:.4g}", progress=progress)
+                    if not first_wall:
+                        first_wall.append(r["wall_seconds"])
                     row["wall_seconds"] += r["wall_seconds"]
                     return forced_bounded(r, ref_ke, ref_ov, d)
 
