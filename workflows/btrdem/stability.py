@@ -77,7 +77,7 @@ def _case(name, what, count=None, density=None, radius=None, container=None, sou
 def build_cases(tiny: bool = False, full: bool = False) -> list:
     """The material cases: one scene each. tiny: the fewest grains that still run; full: larger columns."""
     n = 12 if tiny else 40
-    column = 30 if tiny else (1500 if full else 200)
+    column = 30 if tiny else (1500 if full else 100)
     return [
         _case("base", "glass-density bed, E = 5e6 Pa, r 0.5-1 mm", count=n),
         _case("steel", "steel, E = 2e11 Pa, rho = 7800", count=n, density=7800.0, material=STEEL),
@@ -208,7 +208,10 @@ def rest_verdict(run: dict, csv_relaxed: str | None, threshold: float) -> tuple[
     if run["rc"] == 2:
         return "refused", run["error"].splitlines()[0].replace("btr relax: ", "") if run["error"] else "refused", {}
     if run["rc"] != 0:
-        return "unstable", classify(run["error"]), {}
+        why = classify(run["error"])
+        if why.startswith("engine hung"):  # at the rule's step this is the wall-time budget, not a blow-up
+            return "not at rest", "wall-time limit reached before the stop rule or the time cap", {}
+        return "unstable", why, {}
     info = {"stop_reason": run["relax"]["stop_reason"], "simulated_time": run["relax"]["simulated_time"]}
     grow = energy_growth(run["kinetic"], threshold)
     if grow:
@@ -280,6 +283,7 @@ def run_stability(outdir=None, engines=("liggghts", "yade"), tiny: bool = False,
     iterations = 1 if tiny else (4 if full else 2)
     window = 1500 if tiny else (8000 if full else 3000)
     time_limit = 60.0 if tiny else 240.0
+    rest_limit = 120.0 if tiny else (1800.0 if full else 240.0)
     selected = build_cases(tiny, full) if cases is None else cases
     outdir.mkdir(parents=True, exist_ok=True)
     rec = RunRecord(outdir, "stability", btr=btr, progress=progress,
@@ -288,6 +292,14 @@ def run_stability(outdir=None, engines=("liggghts", "yade"), tiny: bool = False,
                               "window_rule_steps": window, "bisection_iterations": iterations,
                               "max_multiple": MAX_MULTIPLE, "growth": GROWTH})
     rows = []
+    # Rows of an earlier run of the same settings into this folder are kept (a restarted sweep goes on).
+    earlier = {}
+    previous = outdir / "stability.json"
+    if previous.exists():
+        old = json.loads(previous.read_text())
+        if old.get("window_rule_steps") == window:
+            earlier = {(r["case"], r["engine"]): r for r in old.get("rows", [])
+                       if r.get("edge") or r.get("verdict") == "refused"}
 
     def write_tables(rows_so_far):
         res = {"engines": list(engines), "overlap_bound": OVERLAP_BOUND, "window_rule_steps": window,
@@ -318,12 +330,17 @@ def run_stability(outdir=None, engines=("liggghts", "yade"), tiny: bool = False,
             return built
 
         for engine in engines:
+            if (case["name"], engine) in earlier and earlier[(case["name"], engine)].get("grains") == \
+                    case["scene"]["grains"]["count"]:
+                rows.append(earlier[(case["name"], engine)])
+                progress(f"   {case['name']} / {engine}: kept from the earlier run in {outdir}")
+                continue
             row = {"case": case["name"], "what": case["what"], "engine": engine, "wall_seconds": 0.0}
             with rec.case(f"{case['name']} / {engine}", rows, row, on_row=write_tables):
                 c = case_input()
                 row.update(grains=c["grains"], rest_time_cap=c["rest_time"], predicted_overlap=c["predicted"])
                 edir = cdir / engine
-                rest = relax_once(btr, c["csv"], engine, edir / "rest", c["rest_time"], time_limit=600.0,
+                rest = relax_once(btr, c["csv"], engine, edir / "rest", c["rest_time"], time_limit=rest_limit,
                                   label="rest", progress=progress)
                 verdict, reason, info = rest_verdict(rest, str(edir / "rest" / "relaxed.csv"), c["threshold"])
                 row.update(verdict=verdict, reason=reason, stable_step=rest["stable_step"],
@@ -333,6 +350,14 @@ def run_stability(outdir=None, engines=("liggghts", "yade"), tiny: bool = False,
                     continue
                 if verdict == "unstable":
                     ref_ke, ref_ov = c["threshold"], 0.0
+                elif verdict == "not at rest":  # the reference is the rule's step over the probes' window
+                    ref = relax_once(btr, c["csv"], engine, edir / "window_x1", window * rest["stable_step"],
+                                     time_limit=time_limit, label="x1", progress=progress)
+                    if ref["rc"] != 0:
+                        row["reason"] += f"; the rule's step over the window failed too: {classify(ref['error'])}"
+                        continue
+                    ref_ke = max(float(np.max(ref["kinetic"][:, 1])) if len(ref["kinetic"]) else 0.0, c["threshold"])
+                    ref_ov = measured_overlap(str(edir / "window_x1" / "relaxed.csv"))["largest"]
                 else:
                     ref_ke = max(float(np.max(rest["kinetic"][:, 1])) if len(rest["kinetic"]) else 0.0, c["threshold"])
                     ref_ov = info["overlap"]["largest"]
@@ -383,7 +408,7 @@ def summary(rows) -> str:
     text = (f"{len(edges)} of {len(done)} case/engine pairs reached an unbounded step by bisection; "
             f"verdicts at the rule's step: " +
             ", ".join(f"{v} {sum(1 for r in rows if r.get('verdict') == v)}"
-                      for v in ("stable", "unstable", "outside validity", "refused")) + ".")
+                      for v in ("stable", "unstable", "outside validity", "not at rest", "refused")) + ".")
     if done:
         finite = [r["margin"] for r in done if r["margin"] is not None]
         if finite:
