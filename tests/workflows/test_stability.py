@@ -141,3 +141,11 @@ def test_stability_workflow_tiny(tmp_path, source_dir, btr_binary, liggghts, yad
     assert (out / "stability.png").read_bytes()[:4] == b"\x89PNG"
     run_json = json.loads((out / "run.json").read_text())
     assert run_json["status"] == "ok"
+
+
+def test_rest_run_out_of_wall_time_is_not_called_unstable():
+    hung = {"rc": 5, "error": "btr relax: yade relaxation failed in X: killed after the wall-time limit (240 s)"}
+    assert st.rest_verdict(hung, "unused.csv", 1e-12)[0] == "not at rest"
+    blown = {"rc": 5, "error": "btr relax: ... kinetic energy grew to 3 J at t = 0.01 s ...: the run blew up"}
+    assert st.rest_verdict(blown, "unused.csv", 1e-12) == ("unstable", st.classify(blown["error"]), {})
+    assert st.classify(blown["error"]).startswith("blow-up")
