@@ -153,7 +153,7 @@ def classify(message: str) -> str:
     m = message.lower()
     if "killed after" in m or "wall-time limit" in m or "time limit" in m:
         return "engine hung (wall-time limit)"
-    if "blew up" in m or "blow-up" in m or "kinetic energy grew" in m:
+    if "blew up" in m or "blow-up" in m or "kinetic energy grew" in m or "above the bound" in m:
         return "blow-up (kinetic energy above twice the energy the packing holds)"
     if "lost" in m:
         return "lost grains"
@@ -332,7 +332,7 @@ def run_stability(outdir=None, engines=("liggghts", "yade"), tiny: bool = False,
         for engine in engines:
             if (case["name"], engine) in earlier and earlier[(case["name"], engine)].get("grains") == \
                     case["scene"]["grains"]["count"]:
-                rows.append(earlier[(case["name"], engine)])
+                rows.append(_reclassified(earlier[(case["name"], engine)], outdir))
                 progress(f"   {case['name']} / {engine}: kept from the earlier run in {outdir}")
                 continue
             row = {"case": case["name"], "what": case["what"], "engine": engine, "wall_seconds": 0.0}
@@ -399,6 +399,19 @@ def run_stability(outdir=None, engines=("liggghts", "yade"), tiny: bool = False,
     rec.finish({"summary": res["summary"]})
     progress(res["summary"])
     return res
+
+
+def _reclassified(row: dict, outdir: Path) -> dict:
+    """A kept row whose probes' reasons are re-read from their stderr with today's classify()."""
+    edge = row.get("edge") or {}
+    for pr in edge.get("probes", []):
+        label = f"x{pr['multiple']:.4g}"
+        err = outdir / "cases" / row["case"] / row["engine"] / f"forced_{label}" / f"{label}.stderr"
+        if not pr["bounded"] and pr["reason"].startswith("engine error") and err.exists():
+            pr["reason"] = classify(err.read_text(errors="replace"))
+            if pr["multiple"] == edge.get("smallest_unbounded"):
+                edge["unbounded_reason"] = pr["reason"]
+    return row
 
 
 def summary(rows) -> str:
