@@ -16,6 +16,7 @@ Runner add_relax_command(CLI::App& app) {
     std::string packing, engine, out;
     btr::RelaxSettings settings;
     double timestep = 0.0;
+    double forced_timestep = 0.0;
     double max_time = 0.0;
     double damping = 0.0;
     std::string stop_rule;
@@ -34,6 +35,13 @@ Runner add_relax_command(CLI::App& app) {
       ->required();
   cmd->add_option("--timestep", o->timestep, "time step [s]; refused if above the stable one")
       ->check(CLI::PositiveNumber);
+  // Stability studies only (workflows/btrdem/stability.py bisects the step with it): hidden from --help
+  // (empty group), never used by default; relaxed.json and the console record that the step was forced.
+  cmd->add_option("--force-timestep", o->forced_timestep,
+                  "time step [s] used even above the stable one (stability study only)")
+      ->check(CLI::PositiveNumber)
+      ->excludes("--timestep")
+      ->group("");
   cmd->add_option("--max-time", o->max_time, "simulated time limit [s] (default: the scene's relax.max_time)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--damping", o->damping,
@@ -55,6 +63,7 @@ Runner add_relax_command(CLI::App& app) {
     try {
       PackingWithScene p = load_packing_with_scene(o->packing);
       if (cmd->count("--timestep")) o->settings.timestep = o->timestep;
+      if (cmd->count("--force-timestep")) o->settings.forced_timestep = o->forced_timestep;
       if (cmd->count("--max-time")) p.scene.relax.max_time = o->max_time;
       if (cmd->count("--damping")) o->settings.damping = o->damping;
       if (!o->stop_rule.empty()) p.scene.relax.stop_rule = o->stop_rule;

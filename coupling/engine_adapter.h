@@ -14,6 +14,8 @@ namespace btr {
 struct RelaxPlan {
   double timestep = 0.0;        // s, already checked against the stable step
   std::string timestep_rule;    // one line, e.g. "Rayleigh time 1.2e-5 s x 0.2 (Hertz, smallest grain)"
+  double stable_timestep = 0.0; // s, the rule's step (equal to timestep unless requested or forced)
+  bool timestep_forced = false; // RelaxSettings::forced_timestep was used: the step was not checked
   double max_time = 0.0;        // simulated seconds
   double kinetic_threshold = 0.0;  // J: stop when the total kinetic energy falls below this
   double largest_overlap = 0.0;    // of the input packing, relative to the smaller radius

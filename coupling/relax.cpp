@@ -118,8 +118,16 @@ RelaxPlan make_plan(const Packing& packing, const Scene& scene, const RelaxSetti
   RelaxPlan plan;
   const StableStep stable = stable_timestep(packing.grains, scene,
                                             engine == "yade" ? DampedMode::TangentialSameDashpot : DampedMode::Normal);
+  plan.stable_timestep = stable.step;
   const std::optional<double> requested = settings.timestep ? settings.timestep : scene.relax.timestep;
-  if (requested) {
+  if (settings.forced_timestep) {
+    const double forced = *settings.forced_timestep;
+    if (!(forced > 0.0)) throw RelaxRefused("forced time step must be positive, got " + g6(forced));
+    plan.timestep = forced;
+    plan.timestep_forced = true;
+    plan.timestep_rule = "FORCED " + g6(forced) + " s = " + g6(forced / stable.step) +
+                         " x the stable step, not checked (stability study only; stable: " + stable.rule + ")";
+  } else if (requested) {
     if (!(*requested > 0.0)) throw RelaxRefused("requested time step must be positive, got " + g6(*requested));
     if (*requested > stable.step)
       throw RelaxRefused("requested time step " + g6(*requested) + " s is above the stable step " + g6(stable.step) +
@@ -169,6 +177,8 @@ std::vector<std::string> write_engine_inputs(const Packing& packing, const Scene
   fs::create_directories(dir, ec);
   if (ec) throw std::runtime_error(dir + ": cannot create the output folder: " + ec.message());
   std::cout << "time step " << g6(plan.timestep) << " s: " << plan.timestep_rule << "\n"
+            << "stable time step " << g6(plan.stable_timestep) << " s" << (plan.timestep_forced ? " (step FORCED)" : "")
+            << "\n"
             << "largest initial overlap: " << g6(plan.largest_overlap) << " of the smaller radius\n"
             << "stop rule: " << plan.stop_rule << " (threshold "
             << g6(stop_threshold(plan))
@@ -312,6 +322,8 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
       {"np", settings.np},
       {"timestep", plan.timestep},
       {"timestep_rule", plan.timestep_rule},
+      {"stable_timestep", plan.stable_timestep},
+      {"timestep_forced", plan.timestep_forced},
       {"max_time", plan.max_time},
       {"kinetic_threshold", plan.kinetic_threshold},
       {"stop_reason", res.stop_reason},

@@ -16,6 +16,9 @@ struct RelaxSettings {
   int np = 1;                       // LIGGGHTS: MPI ranks; YADE: threads
   double wall_time_limit = 3600.0;  // s; the engine is killed past this
   std::optional<double> timestep;   // overrides the computed stable step (refused if above it)
+  // Study only (`btr relax --force-timestep`, hidden): this step is used even above the stable one,
+  // never refused; the run records that it was forced. Never set on the default path.
+  std::optional<double> forced_timestep;
   double max_overlap = 0.05;        // refuse packings whose largest overlap / smaller radius exceeds this
   std::optional<double> damping;    // overrides the scene's relax.damping
 };

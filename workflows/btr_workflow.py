@@ -5,7 +5,7 @@
   pour PACKING.csv -o OUTDIR [--seed N]   reference LIGGGHTS pour of a BTR packing's grains
   pipeline [SCENE] [-o OUTDIR]            BTR -> DEM relaxation -> comparison -> report (default inputs/bed3d.toml)
   error-vs-runtime SCENE [-o OUTDIR]      error of BTR, BTR + relaxation and DEM pours against a pour reference
-  stability [-o OUTDIR] [--tiny]          relaxation stability sweep in each engine
+  stability [-o OUTDIR] [--tiny|--full]   stiff/extreme cases run to rest; stable-step margin by bisection
   brazil-nut [-o OUTDIR] [--tiny]         intruder rise under dynamic BTR shaking, Phi sweep, 3D and 2D
   drum [-o OUTDIR] [--revolutions N]      segregation and dynamic angle in a rotating drum (2D, 3D)
 
@@ -89,12 +89,13 @@ def main(argv=None) -> int:
     e.add_argument("--np", type=int, default=1)
     e.add_argument("--margin", type=float, help=margin_help)
 
-    s = sub.add_parser("stability", help="relaxation stability sweep")
+    s = sub.add_parser("stability", help="stiff and extreme cases run to rest; stable-step margin by bisection")
     s.add_argument("-o", "--out", help="output folder (default out/stability)")
     s.add_argument("--engines", default="liggghts,yade")
-    s.add_argument("--scene", help="base scene TOML (default: a small periodic bed)")
-    s.add_argument("--tiny", action="store_true", help="two values per parameter, 60 grains, 3000 steps")
-    s.add_argument("--max-steps", type=int)
+    s.add_argument("--cases", help="comma-separated case names (default: all)")
+    size = s.add_mutually_exclusive_group()
+    size.add_argument("--tiny", action="store_true", help="12 grains, one bisection step (tests)")
+    size.add_argument("--full", action="store_true", help="1500-grain column, longer windows, 4 bisection steps")
     s.add_argument("--np", type=int, default=1)
 
     bn = sub.add_parser("brazil-nut", help="Brazil-nut effect under dynamic BTR shaking (btr shake)")
@@ -148,7 +149,16 @@ def main(argv=None) -> int:
             bad = [x for x in engines if x not in ("liggghts", "yade")]
             if bad:
                 raise InputError(f"--engines: expected liggghts and/or yade, got {', '.join(bad)}")
-            run_stability(args.out, engines, args.scene, args.tiny, args.max_steps, args.np, progress)
+            from btrdem.stability import build_cases
+            cases = build_cases(args.tiny, args.full)
+            if args.cases:
+                names = [x for x in args.cases.split(",") if x]
+                unknown = [x for x in names if x not in [c["name"] for c in cases]]
+                if unknown:
+                    raise InputError(f"--cases: unknown {', '.join(unknown)}; expected some of "
+                                     f"{', '.join(c['name'] for c in cases)}")
+                cases = [c for c in cases if c["name"] in names]
+            run_stability(args.out, engines, args.tiny, args.full, args.np, progress, cases)
         elif args.command == "brazil-nut":
             from btrdem.brazil_nut import run_brazil_nut
             dims = [x for x in args.dims.split(",") if x]

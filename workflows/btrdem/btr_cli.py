@@ -33,7 +33,8 @@ def deposit(btr: str, scene_path: str, outdir, name: str = "btr", seed: int | No
 
 
 def relax(btr: str, packing_csv: str, engine: str, outdir, np: int = 1, timestep: float | None = None,
-          time_limit: float | None = None, progress=print, label: str | None = None, check: bool = True) -> dict:
+          time_limit: float | None = None, progress=print, label: str | None = None, check: bool = True,
+          extra_args=()) -> dict:
     """btr relax PACKING --engine E -o OUTDIR; returns {returncode, wall_seconds, csv, error, ...}.
     With check=True a failed run raises StepFailed with the program's message."""
     if engine not in ENGINES:
@@ -46,6 +47,7 @@ def relax(btr: str, packing_csv: str, engine: str, outdir, np: int = 1, timestep
         argv += ["--timestep", repr(float(timestep))]
     if time_limit is not None:
         argv += ["--time-limit", repr(float(time_limit))]
+    argv += [str(a) for a in extra_args]
     log = _engine_log(outdir, engine)
     res = run_command(argv, outdir, label, progress=progress, watch=log, stdout_name=f"{label}.stdout")
     err = Path(res["stderr"]).read_text(errors="replace").strip()

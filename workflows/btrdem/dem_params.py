@@ -37,11 +37,16 @@ def effective_young(a: dict, b: dict) -> float:
     return 1.0 / ((1 - a["poisson"] ** 2) / a["young"] + (1 - b["poisson"] ** 2) / b["young"])
 
 
+def hooke_stiffness(r_eff, m_eff, y_eff, velocity) -> float:
+    """LIGGGHTS "model hooke": k_n = 16/15 sqrt(R*) Y* (15 m* V^2 / (16 sqrt(R*) Y*))^(1/5)."""
+    s = math.sqrt(r_eff)
+    return 16.0 / 15.0 * s * y_eff * (15.0 * m_eff * velocity ** 2 / (16.0 * s * y_eff)) ** 0.2
+
+
 def hooke_contact_time(r_eff, m_eff, y_eff, velocity, restitution) -> float:
     """LIGGGHTS "model hooke" stiffness and damping from the materials and the characteristic
     velocity, and the contact time pi / sqrt(k/m* - (gamma_n / 2 m*)^2) (coupling/timestep.h)."""
-    s = math.sqrt(r_eff)
-    k = 16.0 / 15.0 * s * y_eff * (15.0 * m_eff * velocity ** 2 / (16.0 * s * y_eff)) ** 0.2
+    k = hooke_stiffness(r_eff, m_eff, y_eff, velocity)
     gamma = 0.0
     if restitution < 1.0:
         q = math.pi / math.log(restitution)

@@ -1,333 +1,505 @@
-"""`stability`: relax a small BTR packing in each engine over a one-at-a-time sweep of Young's
-modulus, size ratio, grain size, restitution, friction and time-step fraction (DESIGN.md section 7).
+"""`stability`: stiff and extreme cases run to rest in each engine, and the largest stable time step
+found by bisection, as a multiple of the coupling's rule (coupling/timestep.h).
 
-Each case starts from the base scene and changes one thing:
-  young          the scene's Young's modulus (Pa)
-  size_ratio     r_max / r_min of a uniform radius distribution with the base r_max (a new deposit)
-  grain_size     the whole packing scaled so that the largest diameter is this (m)
-  restitution, friction   the scene's material
-  timestep_fraction       the scene's relax.timestep_fraction (the coupling's rule allows (0, 1])
-  timestep_x     an explicit --timestep of this multiple of the stable step (above 1: must be refused)
-Every relaxation is capped at `max_steps` time steps (max_time = min(scene max_time, max_steps dt)).
-Status: pass; fail with the reason (engine error, kinetic energy growth, overlap above bound, grains
-lost); refused (the coupling refused the case before any engine ran: a time step above the stable one,
-as its rule says it must, or a value the engine cannot run, e.g. LIGGGHTS' restitution <= 0.05).
-The time-step rule is consistent when every case it allows passes."""
+For every material case and engine:
+1. **Run to rest** at the rule's step: the run ends at its stop rule (kinetic energy) or at a
+   simulated-time cap of REST_FREE_FALL_TIMES free-fall times of the bed, sqrt(2 H / g) with H the
+   packing's top (never at a step cap). Verdict, one of
+     stable            bounded, no overlap above the bound (at rest, or "not at rest" at the cap)
+     unstable          numerically unstable: the engine blew up (kinetic energy above twice the energy the
+                       packing holds), NaN, lost grains, grains outside, kinetic-energy growth
+     outside validity  bounded, but the static overlap is above OVERLAP_BOUND of the smaller radius: the
+                       contact model (small-overlap Hertz/Hooke) is outside its range; the predicted static
+                       overlap of the same law is shown beside it (predicted_overlap)
+     refused           the coupling refused the case before any engine ran (with its reason)
+2. **Find the edge**: `btr relax --force-timestep` (hidden, study only) at multiples m of the rule's
+   step over a window of WINDOW_STEPS rule steps from the same BTR packing: m = 2, 4, 8, ... up to
+   MAX_MULTIPLE until a run is unbounded, then bisection (geometric midpoints) between the last bounded
+   and the first unbounded multiple. Bounded: exit 0, kinetic energy not above GROWTH x the largest of
+   the rule-step run, largest overlap not above OVERLAP_GROWTH x the rule-step run's plus 0.01 radius.
+   The margin of the rule is the largest bounded multiple.
+Stiff cases use few grains (the pre-loaded start of the DEM-ready issue is not in this branch)."""
 from __future__ import annotations
 
 import copy
+import json
 import math
 import os
+import re
 from pathlib import Path
 
 import numpy as np
 
 from . import btr_cli, dem_params, report
+from .io import atomic_write_text, read_packing, write_json, write_scene_toml
 from .neighbours import touching_pairs
-from .io import atomic_write_text, read_packing, read_scene_toml, write_json, write_scene_toml
 from .runner import REPO, RunRecord, StepFailed, find_btr
 
-OVERLAP_BOUND = 0.05  # largest overlap / smaller radius accepted in a relaxed packing
+OVERLAP_BOUND = 0.05   # static overlap / smaller radius above which the contact law is outside its validity
+REST_FREE_FALL_TIMES = 5.0
+GROWTH = 10.0          # forced run unbounded if its largest kinetic energy exceeds this x the rule run's
+OVERLAP_GROWTH = 2.0
+MAX_MULTIPLE = 64.0
 
-FULL_SWEEP = {
-    "young": [1e5, 1e6, 1e8, 1e10, 2e11],
-    "size_ratio": [1.0, 3.0, 6.46, 10.0],
-    "grain_size": [50e-6, 5e-4, 5e-3, 5e-2],
-    "restitution": [0.05, 0.5, 0.95],
-    "friction": [0.0, 0.5, 1.0],
-    "timestep_fraction": [0.05, 0.1, 0.5, 1.0],
-    "timestep_x": [0.5, 2.0],
-}
-TINY_SWEEP = {
-    "young": [1e5, 2e11],
-    "size_ratio": [1.0, 10.0],
-    "grain_size": [50e-6, 5e-2],
-    "restitution": [0.05, 0.95],
-    "friction": [0.0, 1.0],
-    "timestep_fraction": [0.05, 1.0],
-    "timestep_x": [2.0],
-}
-
-BASE_SCENE = {
+STEEL = {"young": 2e11, "poisson": 0.3}
+GLASS_BED = {  # the base: a small periodic bed of glass-density grains, radius 0.5-1 mm
     "scene": {"name": "stability", "dimension": 3, "seed": 1},
-    "grains": {"count": 200, "density": 2500.0, "radius": {"distribution": "uniform", "min": 0.5e-3, "max": 1.0e-3}},
-    "container": {"kind": "periodic", "size": [0.008, 0.008]},
+    "grains": {"count": 40, "density": 2500.0, "radius": {"distribution": "uniform", "min": 0.5e-3, "max": 1.0e-3}},
+    "container": {"kind": "periodic", "size": [0.005, 0.005]},
     "source": {"kind": "rain"},
     "material": {"young": 5e6, "poisson": 0.3, "restitution": 0.5, "friction": 0.5},
-    "relax": {"engine": "liggghts", "model": "hertz", "max_time": 0.1, "stop_kinetic_ratio": 1e-6,
+    "relax": {"engine": "liggghts", "model": "hertz", "max_time": 1.0, "stop_kinetic_ratio": 1e-6,
               "timestep_fraction": 0.2},
 }
 
 
-def _set_material(sc: dict, **kw):
-    for comp in sc["grains"]["components"]:
-        comp["material"].update(kw)
+def _case(name, what, count=None, density=None, radius=None, container=None, source=None, material=None,
+          dimension=None):
+    sc = copy.deepcopy(GLASS_BED)
+    sc["scene"]["name"] = name
+    if count is not None:
+        sc["grains"]["count"] = count
+    if density is not None:
+        sc["grains"]["density"] = density
+    if radius is not None:
+        sc["grains"]["radius"] = radius
+    if container is not None:
+        sc["container"] = container
+    if source is not None:
+        sc["source"] = source
+    if material:
+        sc["material"].update(material)
+    if dimension is not None:
+        sc["scene"]["dimension"] = dimension
+    return {"name": name, "what": what, "scene": sc}
 
 
-def classify_failure(message: str) -> str:
-    """The failure reason of a non-zero `btr relax` exit, from its message (which carries the
-    engine log's tail): one of the sweep's categories, with the engine's own ERROR line if any."""
-    reason = _classify(message)
-    engine_error = next((line.strip() for line in message.splitlines() if line.strip().startswith("ERROR")), None)
-    return f"{reason}: {engine_error}" if engine_error else reason
+def build_cases(tiny: bool = False, full: bool = False) -> list:
+    """The material cases: one scene each. tiny: the fewest grains that still run; full: larger columns."""
+    n = 12 if tiny else 40
+    column = 30 if tiny else (1500 if full else 100)
+    return [
+        _case("base", "glass-density bed, E = 5e6 Pa, r 0.5-1 mm", count=n),
+        _case("steel", "steel, E = 2e11 Pa, rho = 7800", count=n, density=7800.0, material=STEEL),
+        _case("steel_ratio10", "steel, r_max / r_min = 10 (r 0.2-2 mm)", count=n, density=7800.0, material=STEEL,
+              radius={"distribution": "uniform", "min": 0.2e-3, "max": 2.0e-3},
+              container={"kind": "periodic", "size": [0.012, 0.012]}),
+        _case("soft_large", "soft (E = 1e5 Pa) grains of 5 cm", count=n, material={"young": 1e5},
+              radius={"distribution": "constant", "value": 0.025}, container={"kind": "periodic", "size": [0.2, 0.2]}),
+        _case("e0.05_mu1", "restitution 0.05, friction 1", count=n, material={"restitution": 0.05, "friction": 1.0}),
+        _case("e0.1_mu1", "restitution 0.1, friction 1", count=n, material={"restitution": 0.1, "friction": 1.0}),
+        _case("steel_column", f"steel column of {column} grains (r = 1 mm, 3 d x 3 d cell)", count=column,
+              density=7800.0, material=STEEL, radius={"distribution": "constant", "value": 1.0e-3},
+              container={"kind": "periodic", "size": [0.006, 0.006]}),
+        _case("hele_shaw_w1.1d", "Hele-Shaw cell, gap w = 1.1 d (r = 0.5 mm)", count=n,
+              radius={"distribution": "constant", "value": 0.5e-3},
+              container={"kind": "hele-shaw", "size": [0.02], "gap": 1.1e-3},
+              source={"kind": "region", "x": [-0.009, 0.009], "y": [-0.04e-3, 0.04e-3]}),
+        _case("2d", "2D disks, periodic 2 cm", count=n, dimension=2, container={"kind": "periodic", "size": [0.02]}),
+    ]
 
 
-def _classify(message: str) -> str:
-    m = message.lower()
-    if "kinetic energy" in m or "blew up" in m or "blow-up" in m:
-        return "kinetic energy growth"
-    if "lost" in m or "outside the container" in m or "left the" in m:
-        return "grains lost"
-    if "overlap" in m:
-        return "overlap above bound"
-    if "nan" in m or "non-finite" in m:
-        return "engine error (non-finite values)"
-    return "engine error"
+# ---------------------------------------------------------------- predicted static overlap
+
+def predicted_overlap(p, scene: dict) -> dict:
+    """Static overlap / radius of the contact law for a grain on the floor: alone (weight m g) and
+    under its column (F = total weight / number of grains touching the floor).
+    Hertz: delta = (3 F / (4 E* sqrt(R)))^(2/3); Hooke: delta = F / k_n (LIGGGHTS' k_n at V = sqrt(2 g d_max)).
+    E* of grain and wall (the wall takes the first component's material)."""
+    table = dem_params.species_table(scene)
+    wall = table[int(dem_params.components(scene)[0]["species"])]
+    m = dem_params.masses(p.radius, p.species, scene)
+    on_floor = p.pos[:, 2] <= p.radius * (1.0 + 1e-3) + 1e-12
+    if not np.any(on_floor):
+        on_floor = p.pos[:, 2] <= np.min(p.pos[:, 2] - p.radius) + p.radius * 1.001
+    r = float(np.mean(p.radius[on_floor]))
+    mat = table[int(p.species[on_floor][0])]
+    y_eff = dem_params.effective_young(mat, wall)
+    m1 = float(np.mean(m[on_floor]))
+    column_load = float(np.sum(m)) * dem_params.G / int(np.sum(on_floor))
+    hooke = (scene.get("relax") or {}).get("model", "hertz") == "hooke"
+
+    def delta(force):
+        if hooke:
+            k = dem_params.hooke_stiffness(r, m1, y_eff, dem_params.hooke_characteristic_velocity(p.radius))
+            return force / k
+        return (3.0 * force / (4.0 * y_eff * math.sqrt(r))) ** (2.0 / 3.0)
+
+    return {"law": "hooke" if hooke else "hertz", "single": delta(m1 * dem_params.G) / r,
+            "column": delta(column_load) / r, "floor_grains": int(np.sum(on_floor))}
 
 
-def check_result(relaxed_csv: str, n_expected: int, kinetic_threshold: float) -> tuple[str, str, dict]:
-    """(status, reason, numbers) of a relaxation that exited normally."""
-    p = read_packing(relaxed_csv)
-    c = p.container()
-    info = {}
-    if len(p) != n_expected:
-        return "fail", f"grains lost: {len(p)} of {n_expected} came back", info
-    if not np.all(np.isfinite(p.pos)):
-        return "fail", "engine error (non-finite positions)", info
-    outside = (p.pos[:, 2] < -0.5 * p.radius) | (c.wall_distance(p.pos) < -0.5 * p.radius)
-    if np.any(outside):
-        return "fail", f"grains lost: grain {int(p.ids[np.argmax(outside)])} left the container", info
-    pairs, dist = touching_pairs(p.pos, p.radius, c, tol=0.0)
+def measured_overlap(csv: str) -> dict:
+    """Largest overlap / smaller radius in a relaxed packing: grain pairs and floor."""
+    p = read_packing(csv)
+    pairs, dist = touching_pairs(p.pos, p.radius, p.container(), tol=0.0)
     worst = 0.0
     if len(pairs):
         ri, rj = p.radius[pairs[:, 0]], p.radius[pairs[:, 1]]
         worst = float(np.max((ri + rj - dist) / np.minimum(ri, rj)))
-    floor_overlap = float(np.max(np.maximum(p.radius - p.pos[:, 2], 0.0) / p.radius))
-    info["max_overlap"] = max(worst, floor_overlap)
-    if info["max_overlap"] > OVERLAP_BOUND:
-        return "fail", f"overlap above bound: {info['max_overlap']:.3g} of the smaller radius > {OVERLAP_BOUND:g}", info
-    kin = Path(relaxed_csv).parent / "kinetic.csv"
-    rows = kin.read_text().split("\n")[1:] if kin.exists() else []
-    if any(line.strip() for line in rows):
-        a = np.array([[float(v) for v in line.split(",")[:2]] for line in rows if line.strip()])
-        if a.size:
-            e = a[:, 1]
-            info["final_kinetic_energy"] = float(e[-1])
-            info["max_kinetic_energy"] = float(np.max(e))
-            q = max(1, len(e) // 4)
-            late, before = float(np.mean(e[-q:])), float(np.mean(e[-2 * q:-q])) if len(e) >= 2 * q else float(e[0])
-            if not np.all(np.isfinite(e)):
-                return "fail", "kinetic energy growth (non-finite)", info
-            if late > kinetic_threshold and before > 0 and late > 10.0 * before:
-                return "fail", f"kinetic energy growth: {late:.3g} J in the last quarter vs {before:.3g} J before", info
-    return "pass", "", info
+    floor = float(np.max(np.maximum(p.radius - p.pos[:, 2], 0.0) / p.radius))
+    return {"pairs": worst, "floor": floor, "largest": max(worst, floor)}
 
 
-def build_cases(sweep: dict) -> list:
-    cases = [("base", None)]
-    for param, values in sweep.items():
-        for v in values:
-            cases.append((param, v))
-    return cases
+# ---------------------------------------------------------------- one engine run
+
+def _stable_step(stdout: str) -> float | None:
+    m = re.search(r"^stable time step (\S+) s", stdout, re.M)
+    return float(m.group(1)) if m else None
 
 
-def run_stability(outdir=None, engines=("liggghts", "yade"), base_scene: str | None = None, tiny: bool = False,
-                  max_steps: int | None = None, ranks: int = 1, progress=print) -> dict:
+def classify(message: str) -> str:
+    """The reason of a failed `btr relax` (exit 5), from its message."""
+    m = message.lower()
+    if "killed after" in m or "wall-time limit" in m or "time limit" in m:
+        return "engine hung (wall-time limit)"
+    if "blew up" in m or "blow-up" in m or "kinetic energy grew" in m or "above the bound" in m:
+        return "blow-up (kinetic energy above twice the energy the packing holds)"
+    if "lost" in m:
+        return "lost grains"
+    if "non-finite" in m or "nan" in m:
+        return "NaN"
+    if "outside the container" in m or "left the plane" in m:
+        return "grains outside the container"
+    err = next((x.strip() for x in message.splitlines() if x.strip().startswith("ERROR")), None)
+    return f"engine error: {err}" if err else "engine error"
+
+
+def kinetic_history(outdir) -> np.ndarray:
+    path = Path(outdir) / "kinetic.csv"
+    if not path.exists():
+        return np.zeros((0, 2))
+    a = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    return a.reshape(-1, 2)
+
+
+def relax_once(btr, csv, engine, outdir, max_time, forced=None, time_limit=None, label=None, progress=print) -> dict:
+    """One `btr relax`; returns rc, stdout, error, stable step, relax record (on success), kinetic history."""
+    extra = ["--max-time", repr(float(max_time))]
+    if forced is not None:
+        extra += ["--force-timestep", repr(float(forced))]
+    r = btr_cli.relax(btr, csv, engine, outdir, time_limit=time_limit, progress=progress, label=label or engine,
+                      check=False, extra_args=extra)
+    out = {"rc": r["returncode"], "wall_seconds": r["wall_seconds"], "error": r["error"] or "",
+           "stable_step": _stable_step(r["stdout"]), "relax": None, "kinetic": np.zeros((0, 2))}
+    if r["returncode"] == 0:
+        out["relax"] = json.loads((Path(outdir) / "relaxed.json").read_text())["relax"]
+        out["kinetic"] = kinetic_history(outdir)
+    return out
+
+
+def energy_growth(kinetic: np.ndarray, threshold: float) -> str | None:
+    """Kinetic-energy growth in a run that ended normally: the last quarter's mean above 10x the
+    quarter before, and above the stop threshold."""
+    e = kinetic[:, 1] if len(kinetic) else np.zeros(0)
+    if len(e) and not np.all(np.isfinite(e)):
+        return "NaN in the kinetic energy"
+    if len(e) < 8:
+        return None
+    q = len(e) // 4
+    late, before = float(np.mean(e[-q:])), float(np.mean(e[-2 * q:-q]))
+    if late > threshold and before > 0 and late > 10.0 * before:
+        return f"kinetic-energy growth: {late:.3g} J in the last quarter vs {before:.3g} J before"
+    return None
+
+
+def rest_verdict(run: dict, csv_relaxed: str | None, threshold: float) -> tuple[str, str, dict]:
+    """(verdict, reason, numbers) of the run at the rule's step."""
+    if run["rc"] == 2:
+        return "refused", run["error"].splitlines()[0].replace("btr relax: ", "") if run["error"] else "refused", {}
+    if run["rc"] != 0:
+        why = classify(run["error"])
+        if why.startswith("engine hung"):  # at the rule's step this is the wall-time budget, not a blow-up
+            return "not at rest", "wall-time limit reached before the stop rule or the time cap", {}
+        return "unstable", why, {}
+    info = {"stop_reason": run["relax"]["stop_reason"], "simulated_time": run["relax"]["simulated_time"]}
+    grow = energy_growth(run["kinetic"], threshold)
+    if grow:
+        return "unstable", grow, info
+    ov = measured_overlap(csv_relaxed)
+    info["overlap"] = ov
+    if ov["largest"] > OVERLAP_BOUND:
+        return "outside validity", (f"static overlap {ov['largest']:.3g} of the smaller radius > {OVERLAP_BOUND:g}"), info
+    return "stable", "", info
+
+
+def forced_bounded(run: dict, ref_max_kinetic: float, ref_overlap: float, outdir) -> tuple[bool, str]:
+    """ref_max_kinetic: the larger of the rule-step run's largest kinetic energy and the stop threshold
+    (a bed that hardly moves at the rule's step must not make round-off energies count as growth)."""
+    if run["rc"] == 2:
+        return False, "refused: " + run["error"].splitlines()[0]
+    if run["rc"] != 0:
+        return False, classify(run["error"])
+    e = run["kinetic"][:, 1] if len(run["kinetic"]) else np.zeros(0)
+    if len(e) and not np.all(np.isfinite(e)):
+        return False, "NaN"
+    if len(e) and float(np.max(e)) > GROWTH * max(ref_max_kinetic, 1e-300):
+        return False, f"kinetic energy {float(np.max(e)):.3g} J > {GROWTH:g} x the rule-step run's {ref_max_kinetic:.3g} J"
+    ov = measured_overlap(str(Path(outdir) / "relaxed.csv"))["largest"]
+    if ov > OVERLAP_GROWTH * ref_overlap + 0.01:
+        return False, f"overlap {ov:.3g} of the radius > {OVERLAP_GROWTH:g} x the rule-step run's {ref_overlap:.3g} + 0.01"
+    return True, ""
+
+
+# ---------------------------------------------------------------- bisection
+
+def find_edge(probe, iterations: int, max_multiple: float = MAX_MULTIPLE) -> dict:
+    """probe(m) -> (bounded, reason). Doubles from 2 up to max_multiple until unbounded, then bisects
+    (geometric midpoint) `iterations` times. Returns the largest bounded multiple (lo), the smallest
+    unbounded one (hi, None if none up to max_multiple), its reason, and every probe."""
+    probes = []
+
+    def run(m):
+        ok, why = probe(m)
+        probes.append({"multiple": m, "bounded": ok, "reason": why})
+        return ok, why
+
+    lo, hi, hi_reason = 1.0, None, ""
+    m = 2.0
+    while m <= max_multiple:
+        ok, why = run(m)
+        if not ok:
+            hi, hi_reason = m, why
+            break
+        lo = m
+        m *= 2.0
+    if hi is not None:
+        for _ in range(iterations):
+            mid = math.sqrt(lo * hi)
+            ok, why = run(mid)
+            if ok:
+                lo = mid
+            else:
+                hi, hi_reason = mid, why
+    return {"largest_bounded": lo, "smallest_unbounded": hi, "unbounded_reason": hi_reason, "probes": probes}
+
+
+# ---------------------------------------------------------------- the study
+
+def run_stability(outdir=None, engines=("liggghts", "yade"), tiny: bool = False, full: bool = False, ranks: int = 1,
+                  progress=print, cases: list | None = None) -> dict:
     btr = find_btr()
-    outdir = Path(outdir) if outdir else REPO / "out" / "stability"
-    sweep = TINY_SWEEP if tiny else FULL_SWEEP
-    max_steps = max_steps or (3000 if tiny else 20000)
-    base = read_scene_toml(base_scene) if base_scene else copy.deepcopy(BASE_SCENE)
-    if tiny and not base_scene:
-        base["grains"]["count"] = 60
-        base["container"]["size"] = [0.006, 0.006]
+    outdir = (Path(outdir) if outdir else REPO / "out" / "stability").resolve()
+    iterations = 1 if tiny else (4 if full else 2)
+    window = 1500 if tiny else (8000 if full else 3000)
+    time_limit = 60.0 if tiny else 240.0
+    rest_limit = 120.0 if tiny else (1800.0 if full else 240.0)
+    selected = build_cases(tiny, full) if cases is None else cases
     outdir.mkdir(parents=True, exist_ok=True)
-    base_path = outdir / "inputs" / "base_scene.toml"
-    write_scene_toml(base_path, base)
-    rec = RunRecord(outdir, "stability", inputs=[base_scene] if base_scene else [], btr=btr, progress=progress,
-                    settings={"engines": list(engines), "sweep": sweep, "max_steps": max_steps, "tiny": tiny,
-                              "overlap_bound": OVERLAP_BOUND, "base_scene": str(base_path)})
-    with rec.step("base deposit") as st:
-        dep = btr_cli.deposit(btr, str(base_path), outdir / "base", "btr", progress=progress)
-        st.update(outputs=[dep["csv"]])
-    base_packing = read_packing(dep["csv"])
-    r_max = float(np.max(base_packing.radius))
-    results = []
+    rec = RunRecord(outdir, "stability", btr=btr, progress=progress,
+                    settings={"engines": list(engines), "tiny": tiny, "full": full, "cases": [c["name"] for c in selected],
+                              "overlap_bound": OVERLAP_BOUND, "rest_free_fall_times": REST_FREE_FALL_TIMES,
+                              "window_rule_steps": window, "bisection_iterations": iterations,
+                              "max_multiple": MAX_MULTIPLE, "growth": GROWTH})
+    rows = []
+    # Rows of an earlier run of the same settings into this folder are kept (a restarted sweep goes on).
+    earlier = {}
+    previous = outdir / "stability.json"
+    if previous.exists():
+        old = json.loads(previous.read_text())
+        if old.get("window_rule_steps") == window:
+            earlier = {(r["case"], r["engine"]): r for r in old.get("rows", [])
+                       if r.get("edge") or r.get("verdict") == "refused"}
 
-    def write_tables(rows):
-        """stability.json / .md / .png from the rows so far (rewritten after every case)."""
-        rule = timestep_rule_verdict(rows)
-        res = {"engines": list(engines), "max_steps": max_steps, "overlap_bound": OVERLAP_BOUND, "cases": rows,
-               "timestep_rule": rule, "base_scene": str(base_path)}
+    def write_tables(rows_so_far):
+        res = {"engines": list(engines), "overlap_bound": OVERLAP_BOUND, "window_rule_steps": window,
+               "rest_free_fall_times": REST_FREE_FALL_TIMES, "max_multiple": MAX_MULTIPLE, "rows": rows_so_far,
+               "summary": summary(rows_so_far)}
         write_json(outdir / "stability.json", res)
-        fig = heatmap(outdir / "stability.png", rows, engines)
+        fig = margin_figure(outdir / "stability.png", rows_so_far, engines)
         atomic_write_text(outdir / "stability.md", markdown(res, os.path.basename(fig)))
         return res
 
-    for param, value in build_cases(sweep):
-        case = "base" if param == "base" else f"{param}={value:g}"
-        cdir = outdir / "cases" / case.replace("=", "_")
+    for case in selected:
+        cdir = outdir / "cases" / case["name"]
         built = {}
 
-        def case_input(param=param, value=value, cdir=cdir, built=built):
-            """The case's packing and settings, built once for all engines; a case whose input cannot be
-            built fails in every engine with the reason "input: ..."."""
-            if "error" not in built and "csv" not in built:
-                try:
-                    built["csv"], built["timestep_x"] = _case_input(btr, param, value, base, dep["csv"], cdir, r_max,
-                                                                    max_steps, progress)
-                except StepFailed as e:
-                    built["error"] = f"input: {str(e).splitlines()[0]}"
-                else:
-                    p = read_packing(built["csv"])
-                    sc = p.scene()
-                    built["grains"] = len(p)
-                    built["max_time"] = float(sc["relax"]["max_time"])
-                    built["dt"], _ = dem_params.stable_timestep(p.radius, p.species, sc,
-                                                                float(sc["relax"]["timestep_fraction"]))
-                    built["threshold"] = dem_params.kinetic_threshold(p.radius, p.species, sc,
-                                                                      float(sc["relax"]["stop_kinetic_ratio"]))
-            if "error" in built:
-                raise StepFailed(built["error"])
+        def case_input(case=case, cdir=cdir, built=built):
+            if not built:
+                scene_path = cdir / "scene.toml"
+                write_scene_toml(scene_path, case["scene"])
+                dep = btr_cli.deposit(btr, str(scene_path), cdir, "btr", progress=progress)
+                p = read_packing(dep["csv"])
+                sc = p.scene()
+                top = float(np.max(p.pos[:, 2] + p.radius))
+                built.update(csv=dep["csv"], grains=len(p), top=top,
+                             rest_time=REST_FREE_FALL_TIMES * math.sqrt(2.0 * top / dem_params.G),
+                             threshold=dem_params.kinetic_threshold(p.radius, p.species, sc,
+                                                                    float(sc["relax"]["stop_kinetic_ratio"])),
+                             predicted=predicted_overlap(p, sc))
             return built
 
         for engine in engines:
-            row = {"case": case, "parameter": param, "value": value, "engine": engine, "wall_seconds": 0.0}
-            with rec.case(f"case {case} / {engine}", results, row, on_row=write_tables):
+            if (case["name"], engine) in earlier and earlier[(case["name"], engine)].get("grains") == \
+                    case["scene"]["grains"]["count"]:
+                rows.append(_reclassified(earlier[(case["name"], engine)], outdir))
+                progress(f"   {case['name']} / {engine}: kept from the earlier run in {outdir}")
+                continue
+            row = {"case": case["name"], "what": case["what"], "engine": engine, "wall_seconds": 0.0}
+            with rec.case(f"{case['name']} / {engine}", rows, row, on_row=write_tables):
                 c = case_input()
-                ts = c["dt"] * c["timestep_x"] if c["timestep_x"] is not None else None
-                r = btr_cli.relax(btr, c["csv"], engine, cdir / engine, np=ranks, timestep=ts, progress=progress,
-                                  label=f"{case}-{engine}", check=False)
-                row.update(wall_seconds=r["wall_seconds"], timestep=ts or c["dt"],
-                           steps=int(round(c["max_time"] / (ts or c["dt"]))), grains=c["grains"])
-                if r["returncode"] == 0:
-                    status, reason, info = check_result(r["csv"], c["grains"], c["threshold"])
-                    row.update(info)
-                elif r["returncode"] == 2:
-                    # refused by the coupling before any engine ran: a step above the stable one,
-                    # or a value the engine cannot run (LIGGGHTS: restitution <= 0.05)
-                    status, reason = "refused", (r["error"] or "refused").splitlines()[0].replace("btr relax: ", "")
+                row.update(grains=c["grains"], rest_time_cap=c["rest_time"], predicted_overlap=c["predicted"])
+                edir = cdir / engine
+                rest = relax_once(btr, c["csv"], engine, edir / "rest", c["rest_time"], time_limit=rest_limit,
+                                  label="rest", progress=progress)
+                verdict, reason, info = rest_verdict(rest, str(edir / "rest" / "relaxed.csv"), c["threshold"])
+                row.update(verdict=verdict, reason=reason, stable_step=rest["stable_step"],
+                           wall_seconds=rest["wall_seconds"], **info)
+                row["status"] = verdict
+                if verdict in ("refused",) or rest["stable_step"] is None:
+                    continue
+                if verdict == "unstable":
+                    ref_ke, ref_ov = c["threshold"], 0.0
+                elif verdict == "not at rest":  # the reference is the rule's step over the probes' window
+                    ref = relax_once(btr, c["csv"], engine, edir / "window_x1", window * rest["stable_step"],
+                                     time_limit=time_limit, label="x1", progress=progress)
+                    if ref["rc"] != 0:
+                        row["reason"] += f"; the rule's step over the window failed too: {classify(ref['error'])}"
+                        continue
+                    ref_ke = max(float(np.max(ref["kinetic"][:, 1])) if len(ref["kinetic"]) else 0.0, c["threshold"])
+                    ref_ov = measured_overlap(str(edir / "window_x1" / "relaxed.csv"))["largest"]
                 else:
-                    status, reason = "fail", classify_failure(r["error"] or "")
-                    row["error"] = (r["error"] or "")[:2000]
-                row.update(status=status, reason=reason)
-    with rec.step("table and heat map") as st:
-        res = write_tables(results)
-        rule = res["timestep_rule"]
+                    ref_ke = max(float(np.max(rest["kinetic"][:, 1])) if len(rest["kinetic"]) else 0.0, c["threshold"])
+                    ref_ov = info["overlap"]["largest"]
+                dt = rest["stable_step"]
+
+                first_wall = []
+
+                def probe(m, edir=edir, c=c, dt=dt, ref_ke=ref_ke, ref_ov=ref_ov, engine=engine, first_wall=first_wall):
+                    # A probe has at most as many steps as the first one; YADE can hang after a blow-up (its
+                    # collider), so a probe is killed at 4x the first probe's wall time (at least 20 s).
+                    limit = max(20.0, 4.0 * first_wall[0]) if first_wall else time_limit
+                    d = edir / f"forced_x{m:.4g}"
+                    r = relax_once(btr, c["csv"], engine, d, window * dt, forced=m * dt, time_limit=limit,
+                                   label=f"x{m:.4g}", progress=progress)
+                    if not first_wall:
+                        first_wall.append(r["wall_seconds"])
+                    row["wall_seconds"] += r["wall_seconds"]
+                    return forced_bounded(r, ref_ke, ref_ov, d)
+
+                if verdict == "unstable":  # the rule's own step is not bounded: look below it
+                    edge = {"largest_bounded": None, "smallest_unbounded": 1.0, "unbounded_reason": reason,
+                            "probes": []}
+                    m = 0.5
+                    while m >= 0.125:
+                        ok, why = probe(m)
+                        edge["probes"].append({"multiple": m, "bounded": ok, "reason": why})
+                        if ok:
+                            edge["largest_bounded"] = m
+                            break
+                        edge["smallest_unbounded"], edge["unbounded_reason"] = m, why
+                        m /= 2.0
+                else:
+                    edge = find_edge(probe, iterations)
+                row["edge"] = edge
+                row["margin"] = edge["largest_bounded"]
+    with rec.step("table and figure") as st:
+        res = write_tables(rows)
         st.update(outputs=[str(outdir / "stability.md"), str(outdir / "stability.png")])
-    rec.finish({"timestep_rule": rule["summary"]})
-    progress(rule["summary"])
+    rec.finish({"summary": res["summary"]})
+    progress(res["summary"])
     return res
 
 
-def _case_input(btr, param, value, base, base_csv, cdir: Path, r_max, max_steps, progress):
-    """The packing to relax for one case (its JSON scene edited), and the time-step multiple."""
-    timestep_x = None
-
-    def cap(sc, radius, species):
-        dt, _ = dem_params.stable_timestep(radius, species, sc, float(sc["relax"]["timestep_fraction"]))
-        sc["relax"]["max_time"] = float(min(float(sc["relax"]["max_time"]), max_steps * dt))
-
-    def edit(fn):
-        def apply(sc):
-            fn(sc)
-            p = read_packing(base_csv)
-            cap(sc, p.radius, p.species)
-        return apply
-
-    if param in ("base", "young", "restitution", "friction", "timestep_fraction", "timestep_x"):
-        if param == "young":
-            f = edit(lambda sc: _set_material(sc, young=float(value)))
-        elif param == "restitution":
-            f = edit(lambda sc: _set_material(sc, restitution=float(value)))
-        elif param == "friction":
-            f = edit(lambda sc: _set_material(sc, friction=float(value)))
-        elif param == "timestep_fraction":
-            f = edit(lambda sc: sc["relax"].update(timestep_fraction=float(value)))
-        else:
-            f = edit(lambda sc: None)
-            if param == "timestep_x":
-                timestep_x = float(value)
-        return btr_cli.variant(base_csv, cdir / "input", "btr", f), timestep_x
-    if param == "grain_size":
-        factor = float(value) / (2.0 * r_max)
-        csv = btr_cli.scaled_variant(base_csv, cdir / "input", "scaled", factor)
-        p = read_packing(csv)
-        return btr_cli.variant(csv, cdir / "input", "btr", lambda sc: cap(sc, p.radius, p.species)), None
-    if param == "size_ratio":
-        scene = copy.deepcopy(base)
-        rmax = float(scene["grains"]["radius"]["max"])
-        if value == 1.0:
-            scene["grains"]["radius"] = {"distribution": "constant", "value": rmax}
-        else:
-            scene["grains"]["radius"] = {"distribution": "uniform", "min": rmax / float(value), "max": rmax}
-        scene["scene"]["name"] = f"stability_size_ratio_{value:g}"
-        path = cdir / "input" / "scene.toml"
-        write_scene_toml(path, scene)
-        dep = btr_cli.deposit(btr, str(path), cdir / "input", "deposited", progress=progress, label="deposit")
-        p = read_packing(dep["csv"])
-        return btr_cli.variant(dep["csv"], cdir / "input", "btr", lambda sc: cap(sc, p.radius, p.species)), None
-    raise StepFailed(f"stability: unknown parameter {param!r}")
+def _reclassified(row: dict, outdir: Path) -> dict:
+    """A kept row whose probes' reasons are re-read from their stderr with today's classify()."""
+    edge = row.get("edge") or {}
+    for pr in edge.get("probes", []):
+        label = f"x{pr['multiple']:.4g}"
+        err = outdir / "cases" / row["case"] / row["engine"] / f"forced_{label}" / f"{label}.stderr"
+        if not pr["bounded"] and pr["reason"].startswith("engine error") and err.exists():
+            pr["reason"] = classify(err.read_text(errors="replace"))
+            if pr["multiple"] == edge.get("smallest_unbounded"):
+                edge["unbounded_reason"] = pr["reason"]
+    return row
 
 
-def timestep_rule_verdict(results) -> dict:
-    allowed = [r for r in results if r["status"] != "refused"]
-    failed = [r for r in allowed if r["status"] == "fail"]
-    refused = [r for r in results if r["status"] == "refused"]
-    wrongly_allowed = [r for r in results if r["parameter"] == "timestep_x" and r["value"] > 1.0 and r["status"] != "refused"]
-    if failed:
-        summary = (f"Time-step rule: {len(failed)} of {len(allowed)} allowed cases FAILED: " +
-                   "; ".join(f"{r['case']} / {r['engine']} ({r['reason']})" for r in failed))
-    else:
-        summary = f"Time-step rule: all {len(allowed)} allowed cases passed"
-    above = sum(1 for r in refused if "above the stable" in r["reason"])
-    summary += (f"; {len(refused)} refused before any engine ran ({above} for a step above the stable one, "
-                f"{len(refused) - above} for values the engine cannot run).")
-    if wrongly_allowed:
-        summary += " Steps above the stable one were NOT refused: " + ", ".join(
-            f"{r['case']} / {r['engine']}" for r in wrongly_allowed) + "."
-    return {"allowed": len(allowed), "failed_allowed": [f"{r['case']} / {r['engine']}" for r in failed],
-            "refused": len(refused), "above_stable_not_refused": [f"{r['case']} / {r['engine']}" for r in wrongly_allowed],
-            "consistent": not failed and not wrongly_allowed, "summary": summary}
+def summary(rows) -> str:
+    done = [r for r in rows if r.get("edge")]
+    edges = [r for r in done if r["edge"]["smallest_unbounded"] is not None]
+    below = [r for r in done if r["margin"] is None or r["margin"] < 1.0]
+    text = (f"{len(edges)} of {len(done)} case/engine pairs reached an unbounded step by bisection; "
+            f"verdicts at the rule's step: " +
+            ", ".join(f"{v} {sum(1 for r in rows if r.get('verdict') == v)}"
+                      for v in ("stable", "unstable", "outside validity", "not at rest", "refused")) + ".")
+    if done:
+        finite = [r["margin"] for r in done if r["margin"] is not None]
+        if finite:
+            text += f" Smallest margin of the rule: {min(finite):.3g} x its step."
+    if below:
+        text += " The rule's step is NOT stable for: " + ", ".join(f"{r['case']} / {r['engine']}" for r in below) + "."
+    return text
 
 
-def heatmap(path, results, engines) -> str:
+def _margin_text(r) -> str:
+    e = r.get("edge")
+    if not e:
+        return "-"
+    lo = "<" + f"{e['smallest_unbounded']:.3g}" if e["largest_bounded"] is None else f"{e['largest_bounded']:.3g}"
+    hi = f"{e['smallest_unbounded']:.3g}" if e["smallest_unbounded"] is not None else f"none up to {MAX_MULTIPLE:g}"
+    return f"{lo} (unbounded at {hi})"
+
+
+def margin_figure(path, rows, engines) -> str:
     import matplotlib.pyplot as plt
-    from matplotlib.colors import ListedColormap
 
     cases = []
-    for r in results:
+    for r in rows:
         if r["case"] not in cases:
             cases.append(r["case"])
-    code = {"pass": 0, "refused": 1, "fail": 2}
-    grid = np.full((len(cases), len(engines)), np.nan)
-    text = [["" for _ in engines] for _ in cases]
-    for r in results:
-        i, j = cases.index(r["case"]), list(engines).index(r["engine"])
-        grid[i, j] = code[r["status"]]
-        text[i][j] = f"{r['status']} {r['wall_seconds']:.1f}s"
-    fig, ax = plt.subplots(figsize=(2.2 + 2.2 * len(engines), 0.8 + 0.32 * len(cases)))
-    ax.imshow(grid, cmap=ListedColormap(["#4caf50", "#bdbdbd", "#e53935"]), vmin=0, vmax=2, aspect="auto")
-    for i in range(len(cases)):
-        for j in range(len(engines)):
-            ax.text(j, i, text[i][j], ha="center", va="center", fontsize=7)
-    ax.set_xticks(range(len(engines)))
-    ax.set_xticklabels(engines)
-    ax.set_yticks(range(len(cases)))
-    ax.set_yticklabels(cases, fontsize=7)
-    ax.set_title("Relaxation stability: pass (green), refused (grey), fail (red); wall time")
+    fig, ax = plt.subplots(figsize=(max(6.0, 1.1 * len(cases) + 2), 4.2))
+    width = 0.8 / max(1, len(engines))
+    colours = {"liggghts": "#1f77b4", "yade": "#ff7f0e"}
+    for j, engine in enumerate(engines):
+        for i, case in enumerate(cases):
+            r = next((x for x in rows if x["case"] == case and x["engine"] == engine), None)
+            x = i + (j - (len(engines) - 1) / 2) * width
+            if r is None or not r.get("edge"):
+                label = (r or {}).get("verdict", "")
+                ax.text(x, 1.05, label or "-", rotation=90, ha="center", va="bottom", fontsize=7)
+                continue
+            e = r["edge"]
+            lo = e["largest_bounded"] or 0.0
+            ax.bar(x, max(lo, 1e-3), width, color=colours.get(engine, "grey"), label=engine if i == 0 else None)
+            top = e["smallest_unbounded"]
+            if top is not None:
+                ax.plot([x - width / 2, x + width / 2], [top, top], color="red", lw=1.5)
+            else:
+                ax.text(x, lo * 1.05, ">", ha="center", va="bottom", fontsize=8)
+    ax.axhline(1.0, color="black", lw=1, ls="--")
+    ax.set_yscale("log")
+    ax.set_ylim(0.1, MAX_MULTIPLE * 2)
+    ax.set_xticks(range(len(cases)))
+    ax.set_xticklabels(cases, rotation=30, ha="right", fontsize=8)
+    ax.set_ylabel("largest bounded step / rule's step")
+    ax.set_title("Stable-step margin (bar: largest bounded; red: first unbounded; dashed: the rule)", fontsize=9)
+    handles, labels = ax.get_legend_handles_labels()
+    if handles:
+        ax.legend(fontsize=8)
+    fig.tight_layout()
     return report.save_figure(fig, path)
 
 
 def markdown(res: dict, fig_name: str) -> str:
-    headers = ["case", "engine", "status", "reason", "wall time [s]", "time step [s]", "steps (cap)", "max overlap / r"]
-    rows = []
-    for r in res["cases"]:
-        rows.append([r["case"], r["engine"], r["status"], r["reason"] or "-", r["wall_seconds"], r.get("timestep"),
-                     r.get("steps"), r.get("max_overlap", "-") if r["status"] == "pass" else "-"])
+    headers = ["case", "engine", "grains", "verdict at the rule's step", "reason", "stop", "largest overlap / r",
+               "predicted static overlap / r (1 grain; column)", "rule step [s]", "margin (largest bounded multiple)",
+               "unbounded because", "wall [s]"]
+    table = []
+    for r in res["rows"]:
+        pred = r.get("predicted_overlap")
+        ov = (r.get("overlap") or {}).get("largest")
+        e = r.get("edge") or {}
+        table.append([r["case"], r["engine"], r.get("grains", "-"), r.get("verdict", r["status"]), r["reason"] or "-",
+                      r.get("stop_reason", "-"), f"{ov:.3g}" if ov is not None else "-",
+                      f"{pred['single']:.3g}; {pred['column']:.3g} ({pred['law']})" if pred else "-",
+                      f"{r['stable_step']:.3g}" if r.get("stable_step") else "-", _margin_text(r),
+                      e.get("unbounded_reason") or "-", f"{r['wall_seconds']:.1f}"])
     return "\n".join([
-        "# Stability sweep", "",
-        f"One parameter at a time from the base scene ({res['base_scene']}); each relaxation capped at "
-        f"{res['max_steps']} time steps; a relaxed packing fails above an overlap of {res['overlap_bound']:g} of the "
-        "smaller radius.", "", "## Time-step rule", "", res["timestep_rule"]["summary"], "", "## Cases", "",
-        report.md_table(headers, rows), f"![stability heat map]({fig_name})", ""])
+        "# Stability sweep: run to rest, and the edge of the time step", "",
+        f"Each case runs at the rule's step to its stop rule or {res['rest_free_fall_times']:g} free-fall times of the "
+        f"bed. Verdicts: stable; unstable (blow-up, NaN, lost grains, grains outside, energy growth); outside validity "
+        f"(static overlap above {res['overlap_bound']:g} of the smaller radius, with the contact law's predicted "
+        "static overlap beside it); refused (with the coupling's reason). The edge: forced steps of m x the rule's "
+        f"step over {res['window_rule_steps']} rule steps, doubled then bisected; bounded = exit 0, kinetic energy "
+        f"at most {GROWTH:g} x the rule-step run's, overlap bounded.", "", "## Summary", "", res["summary"], "",
+        "## Cases", "", report.md_table(headers, table), f"![stable-step margin]({fig_name})", ""])

@@ -1,0 +1,151 @@
+"""The stability sweep at tiny size, with the real engines: every verdict (stable, unstable, outside
+validity, refused), a forced step that blows up in each engine, the hidden --force-timestep, the
+bisection and the predicted static overlap against closed forms."""
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from btrdem import stability as st
+from btrdem.io import read_packing, write_scene_toml
+
+
+def tiny_case(tmp_path, btr_binary, name, **kw):
+    """A tiny case's BTR packing (the sweep's own scene builder, 12 grains)."""
+    case = next(c for c in st.build_cases(tiny=True) if c["name"] == name)
+    sc = case["scene"]
+    for k, v in kw.items():
+        sc["material"][k] = v
+    path = tmp_path / f"{name}.toml"
+    write_scene_toml(path, sc)
+    out = tmp_path / name
+    subprocess.run([btr_binary, "deposit", str(path), "-o", str(out), "--name", "btr", "-q"], check=True)
+    return str(out / "btr.csv")
+
+
+def rest(btr_binary, csv, engine, out, max_time=0.05):
+    run = st.relax_once(btr_binary, csv, engine, out, max_time, time_limit=120, progress=lambda m: None)
+    return run, st.rest_verdict(run, str(out / "relaxed.csv"), 1e-12)
+
+
+def test_force_timestep_is_hidden_forced_and_recorded(tmp_path, btr_binary, liggghts):
+    help_text = subprocess.run([btr_binary, "relax", "--help"], capture_output=True, text=True).stdout
+    assert "--timestep" in help_text and "--force-timestep" not in help_text
+    csv = tiny_case(tmp_path, btr_binary, "base")
+    run, (verdict, reason, _) = rest(btr_binary, csv, "liggghts", tmp_path / "rule", max_time=0.02)
+    assert verdict == "stable", reason
+    dt = run["stable_step"]
+    assert run["relax"]["timestep_forced"] is False and run["relax"]["timestep"] == pytest.approx(dt, rel=1e-5)
+    # a requested step above the stable one is refused ...
+    p = subprocess.run([btr_binary, "relax", csv, "-o", str(tmp_path / "req"), "--engine", "liggghts",
+                        "--timestep", repr(1.5 * dt)], capture_output=True, text=True)
+    assert p.returncode == 2 and "above the stable step" in p.stderr
+    # ... the same step forced runs, and the run says it was forced
+    forced = st.relax_once(btr_binary, csv, "liggghts", tmp_path / "forced", 0.02, forced=1.5 * dt,
+                           progress=lambda m: None)
+    assert forced["rc"] == 0, forced["error"]
+    assert forced["relax"]["timestep_forced"] is True
+    assert forced["relax"]["timestep"] == pytest.approx(1.5 * dt, rel=1e-12)
+    assert forced["relax"]["stable_timestep"] == pytest.approx(dt, rel=1e-5)
+    assert "FORCED" in forced["relax"]["timestep_rule"]
+    # and both flags at once are a usage error
+    p = subprocess.run([btr_binary, "relax", csv, "-o", str(tmp_path / "both"), "--timestep", repr(dt),
+                        "--force-timestep", repr(dt)], capture_output=True, text=True)
+    assert p.returncode != 0 and not (tmp_path / "both" / "relaxed.csv").exists()
+
+
+@pytest.mark.parametrize("engine", ["liggghts", "yade"])
+def test_forced_step_blows_up_and_rule_step_is_stable(tmp_path, btr_binary, liggghts, yade, engine):
+    csv = tiny_case(tmp_path, btr_binary, "base")
+    run, (verdict, reason, info) = rest(btr_binary, csv, engine, tmp_path / "rule")
+    assert verdict == "stable", reason
+    assert info["overlap"]["largest"] < st.OVERLAP_BOUND
+    dt = run["stable_step"]
+    out = tmp_path / "x20"
+    forced = st.relax_once(btr_binary, csv, engine, out, 1500 * dt, forced=20 * dt, time_limit=120,
+                           progress=lambda m: None)
+    assert forced["rc"] == 5, forced
+    why = st.classify(forced["error"])
+    assert why.startswith(("blow-up", "lost grains", "NaN", "grains outside")), forced["error"]
+    ok, why2 = st.forced_bounded(forced, 1e-9, 0.01, out)
+    assert not ok and why2 == why
+    # the verdict of a run that blew up at its own step is "unstable"
+    assert st.rest_verdict(forced, str(out / "relaxed.csv"), 1e-12)[0] == "unstable"
+
+
+def test_soft_large_grains_are_outside_validity_with_the_hertz_overlap(tmp_path, btr_binary, liggghts):
+    csv = tiny_case(tmp_path, btr_binary, "soft_large")
+    p = read_packing(csv)
+    pred = st.predicted_overlap(p, p.scene())
+    # hand value: one 5 cm grain (rho 2500, E 1e5, nu 0.3) on a wall of the same material
+    r, e_star = 0.025, 1e5 / (2 * (1 - 0.3 ** 2))
+    m = 2500 * 4 / 3 * math.pi * r ** 3
+    assert pred["single"] == pytest.approx((3 * m * 9.81 / (4 * e_star * math.sqrt(r))) ** (2 / 3) / r, rel=1e-9)
+    assert pred["column"] >= pred["single"]
+    run, (verdict, reason, info) = rest(btr_binary, csv, "liggghts", tmp_path / "rule", max_time=1.0)
+    assert verdict == "outside validity", reason
+    measured = info["overlap"]["largest"]
+    assert measured > st.OVERLAP_BOUND
+    # the engine's static overlap is the law's, between one grain's weight and the column load
+    assert 0.8 * pred["single"] < measured < 1.2 * pred["column"]
+
+
+def test_liggghts_refuses_restitution_near_zero(tmp_path, btr_binary, liggghts):
+    csv = tiny_case(tmp_path, btr_binary, "e0.05_mu1")
+    run, (verdict, reason, _) = rest(btr_binary, csv, "liggghts", tmp_path / "rule")
+    assert verdict == "refused" and "restitution" in reason, reason
+
+
+def test_find_edge_brackets_a_known_edge():
+    calls = []
+
+    def probe(m):
+        calls.append(m)
+        return (m < 5.3, "" if m < 5.3 else "blow-up")
+
+    e = st.find_edge(probe, iterations=3)
+    assert e["largest_bounded"] < 5.3 <= e["smallest_unbounded"]
+    assert e["smallest_unbounded"] / e["largest_bounded"] == pytest.approx(2 ** (1 / 8), rel=1e-9)
+    assert calls[:3] == [2.0, 4.0, 8.0] and len(calls) == 6 and e["unbounded_reason"] == "blow-up"
+    never = st.find_edge(lambda m: (True, ""), iterations=3)
+    assert never["smallest_unbounded"] is None and never["largest_bounded"] == st.MAX_MULTIPLE
+
+
+def test_energy_growth_is_detected():
+    t = np.arange(40.0)
+    assert st.energy_growth(np.c_[t, np.exp(-t / 5)], 1e-12) is None
+    assert "growth" in st.energy_growth(np.c_[t, 1e-9 * np.exp(t / 3)], 1e-12)
+    assert "NaN" in st.energy_growth(np.c_[t, np.where(t > 30, np.nan, 1.0)], 1e-12)
+
+
+def test_stability_workflow_tiny(tmp_path, source_dir, btr_binary, liggghts, yade):
+    out = tmp_path / "stab"
+    p = subprocess.run([sys.executable, str(source_dir / "workflows" / "btr_workflow.py"), "stability", "--tiny",
+                        "--cases", "base,e0.05_mu1", "-o", str(out)], capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, p.stdout + p.stderr
+    res = json.loads((out / "stability.json").read_text())
+    rows = {(r["case"], r["engine"]): r for r in res["rows"]}
+    assert set(rows) == {(c, e) for c in ("base", "e0.05_mu1") for e in ("liggghts", "yade")}
+    assert rows[("e0.05_mu1", "liggghts")]["verdict"] == "refused"
+    for key in [("base", "liggghts"), ("base", "yade")]:
+        r = rows[key]
+        assert r["verdict"] == "stable", r
+        e = r["edge"]  # the bisection found a real edge above the rule's step
+        assert e["smallest_unbounded"] is not None and 1.0 <= e["largest_bounded"] < e["smallest_unbounded"]
+        assert all(pr["bounded"] == (pr["multiple"] <= e["largest_bounded"]) for pr in e["probes"])
+    md = (out / "stability.md").read_text()
+    assert md.count("\n| base |") == 2 and "restitution" in md
+    assert (out / "stability.png").read_bytes()[:4] == b"\x89PNG"
+    run_json = json.loads((out / "run.json").read_text())
+    assert run_json["status"] == "ok"
+
+
+def test_rest_run_out_of_wall_time_is_not_called_unstable():
+    hung = {"rc": 5, "error": "btr relax: yade relaxation failed in X: killed after the wall-time limit (240 s)"}
+    assert st.rest_verdict(hung, "unused.csv", 1e-12)[0] == "not at rest"
+    blown = {"rc": 5, "error": "btr relax: ... kinetic energy grew to 3 J at t = 0.01 s ...: the run blew up"}
+    assert st.rest_verdict(blown, "unused.csv", 1e-12) == ("unstable", st.classify(blown["error"]), {})
+    assert st.classify(blown["error"]).startswith("blow-up")
