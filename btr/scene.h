@@ -60,6 +60,7 @@ struct RelaxSpec {
   double stop_kinetic_ratio = 1e-6; // stop when kinetic energy < ratio * sum_i m_i g d_i
   double timestep_fraction = 0.2;   // of the Rayleigh / contact time
   std::optional<double> timestep;   // requested step; refused if above the stable one
+  bool preload = false;             // start from the pre-loaded packing (coupling/preload.h)
 };
 
 struct Scene {

@@ -95,7 +95,7 @@ class SceneParser {
   void parse_relax() {
     auto s = rd_.table(root_, "relax", "[relax]");
     if (!s) return;
-    rd_.check_keys(*s, {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep"});
+    rd_.check_keys(*s, {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep", "preload"});
     RelaxSpec& r = scene_.relax;
     r.engine = rd_.choice(*s, "engine", {"liggghts", "yade"}).value_or(r.engine);
     r.model = rd_.choice(*s, "model", {"hertz", "hooke"}).value_or(r.model);
@@ -105,6 +105,7 @@ class SceneParser {
     r.timestep_fraction = rd_.number_or(*s, "timestep_fraction", r.timestep_fraction,
                                         [](double v) { return v > 0.0 && v <= 1.0; }, "a fraction in (0, 1]");
     if (auto t = rd_.number(*s, "timestep", positive, "a positive time step [s]")) r.timestep = *t;
+    r.preload = rd_.boolean_or(*s, "preload", r.preload);
   }
 
   RadiusSpec parse_radius(const Section& s) {

@@ -179,7 +179,7 @@ LiggghtsSchedule liggghts_schedule(const Grains& grains, const Scene& scene, con
   s.average_every = std::max(1L, static_cast<long>(std::ceil(total / double(kChecksOverMaxTime * kAveragedSamples))));
   s.steps_per_check = s.average_every * kAveragedSamples;
   s.max_checks = std::max(1L, static_cast<long>(std::ceil(total / double(s.steps_per_check))));
-  s.arming_time = stop_arming_time(grains);
+  s.arming_time = plan.arming_time > 0.0 ? plan.arming_time : stop_arming_time(grains);
   s.blowup_bound = kinetic_energy_bound(grains, scene);
   return s;
 }

@@ -189,7 +189,8 @@ json scene_to_json(const Scene& s) {
         {"max_time", s.relax.max_time},
         {"stop_kinetic_ratio", s.relax.stop_kinetic_ratio},
         {"timestep_fraction", s.relax.timestep_fraction},
-        {"timestep", s.relax.timestep ? json(*s.relax.timestep) : json(nullptr)}}},
+        {"timestep", s.relax.timestep ? json(*s.relax.timestep) : json(nullptr)},
+        {"preload", s.relax.preload}}},
   };
 }
 
@@ -257,7 +258,7 @@ Scene scene_from_json(const json& j, const std::string& origin) {
   s.source.file = rd.string(src, "source", "file");
 
   const json& r = rd.object(j, "", "relax",
-                            {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep"});
+                            {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep", "preload"});
   s.relax.engine = rd.string(r, "relax", "engine");
   s.relax.model = rd.string(r, "relax", "model");
   s.relax.max_time = rd.number(r, "relax", "max_time");
@@ -267,6 +268,10 @@ Scene scene_from_json(const json& j, const std::string& origin) {
   if (ts.is_null()) s.relax.timestep.reset();
   else if (ts.is_number()) s.relax.timestep = ts.get<double>();
   else rd.fail("relax.timestep", "expected a number or null, got " + ts.dump());
+  if (r.contains("preload")) {  // absent in packings written before the option existed
+    if (!r["preload"].is_boolean()) rd.fail("relax.preload", "expected true or false, got " + r["preload"].dump());
+    s.relax.preload = r["preload"].get<bool>();
+  }
   return s;
 }
 
