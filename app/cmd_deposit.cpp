@@ -14,6 +14,7 @@
 #include "btr/scene_toml.h"
 #include "commands.h"
 #include "coupling/force_io.h"
+#include "measures_json.h"
 #include "coupling/packing_io.h"
 #include "coupling/preload.h"
 #include "coupling/scene_json.h"
@@ -33,31 +34,6 @@ struct Options {
 
 double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-
-json bulk_to_json(const btr::BulkMeasures& m) {
-  if (!m.valid) return {{"valid", false}, {"note", m.note}};
-  return {{"valid", true},
-          {"note", m.note},
-          {"window", m.slab ? "z-slab" : "box"},
-          {"window_lo", {m.window.lo.x(), m.window.lo.y(), m.window.lo.z()}},
-          {"window_hi", {m.window.hi.x(), m.window.hi.y(), m.window.hi.z()}},
-          {"packing_fraction", m.packing_fraction},
-          {"mean_coordination", m.mean_coordination},
-          {"grains_in_window", m.grains_in_window},
-          {"coordination_histogram", m.coordination_histogram}};
-}
-
-json heap_to_json(const btr::HeapMeasures& h, int dimension) {
-  json j = {{"valid", h.valid}, {"height", h.height}};
-  if (!h.valid) {
-    j["note"] = h.note;
-    return j;
-  }
-  j["angle_of_repose_deg"] = h.angle_deg;
-  if (dimension == 2) j["angle_left_deg"] = h.angle_left_deg, j["angle_right_deg"] = h.angle_right_deg;
-  j["profile_points"] = h.profile_points;
-  return j;
 }
 
 std::string check_message(const btr::CheckReport& c) {
@@ -125,12 +101,7 @@ int run(const Options& o, const CLI::App& cmd) {
 
   // ---- summary measures
   auto t_metrics = std::chrono::steady_clock::now();
-  const std::vector<int> coordination = btr::coordination_numbers(grains, scene.dimension, scene.container);
-  btr::MetricsOptions mo;
-  const bool point = scene.source.kind == btr::SourceSpec::Kind::Point;
-  const btr::BulkMeasures bulk = btr::bulk_measures(grains, scene.dimension, scene.container, mo, &coordination);
-  btr::HeapMeasures heap;
-  if (point) heap = btr::heap_measures(grains, scene.dimension, scene.source.x, scene.source.y);
+  const btr::PackingMeasures measures = measure_in_scene(grains, scene);
   const double metrics_seconds = seconds_since(t_metrics);
 
   // ---- metadata and files
@@ -159,14 +130,14 @@ int run(const Options& o, const CLI::App& cmd) {
       {"radius_min", r_min},
       {"radius_max", r_max},
       {"timings", {{"deposition", result.wall_seconds}, {"check", o.check ? json(check_seconds) : json(nullptr)},
-                   {"metrics", metrics_seconds}, {"writing", nullptr}}},
+                   {"measures", metrics_seconds}, {"writing", nullptr}}},
       {"check", check_json},
-      {"metrics", {{"bulk", bulk_to_json(bulk)}, {"heap", point ? heap_to_json(heap, scene.dimension) : json(nullptr)}}},
+      {"measures", measures_to_json(measures)},
   };
   double write_seconds = 0.0;
   try {
     auto t = std::chrono::steady_clock::now();
-    std::vector<double> z(coordination.begin(), coordination.end());
+    std::vector<double> z(measures.coordination.begin(), measures.coordination.end());
     btr::write_packing(o.out, name, packing, {{"coordination", std::move(z)}});
     write_seconds = seconds_since(t);
     packing.meta["timings"]["writing"] = write_seconds;
@@ -205,20 +176,7 @@ int run(const Options& o, const CLI::App& cmd) {
     std::printf("%s: %lld grains (%dD, %s container, seed %llu) in %.3f s, %.0f grains/s\n", scene.name.c_str(),
                 static_cast<long long>(n), scene.dimension, btr::to_string(scene.container.kind),
                 static_cast<unsigned long long>(seed), result.wall_seconds, rate);
-    if (bulk.valid)
-      std::printf("  bulk: packing fraction %.4f, mean coordination %.3f (%lld grains; %s)\n", bulk.packing_fraction,
-                  bulk.mean_coordination, static_cast<long long>(bulk.grains_in_window), bulk.note.c_str());
-    else
-      std::printf("  bulk: no measure (%s)\n", bulk.note.c_str());
-    if (point) {
-      if (heap.valid && scene.dimension == 2)
-        std::printf("  heap: height %.4g m, angle of repose %.2f deg (left %.2f, right %.2f)\n", heap.height,
-                    heap.angle_deg, heap.angle_left_deg, heap.angle_right_deg);
-      else if (heap.valid)
-        std::printf("  heap: height %.4g m, angle of repose %.2f deg\n", heap.height, heap.angle_deg);
-      else
-        std::printf("  heap: height %.4g m, no angle of repose (%s)\n", heap.height, heap.note.c_str());
-    }
+    std::fputs(measures_summary(measures).c_str(), stdout);
     if (o.check)
       std::printf("  check: %s in %.3f s\n", report.ok() ? "ok" : "FAILED", check_seconds);
     if (o.forces)

@@ -7,6 +7,7 @@
 #include "commands.h"
 #include "coupling/relax.h"
 #include "load_packing.h"
+#include "measures_json.h"
 
 namespace btr_app {
 
@@ -16,6 +17,8 @@ Runner add_relax_command(CLI::App& app) {
     btr::RelaxSettings settings;
     double timestep = 0.0;
     double max_time = 0.0;
+    double damping = 0.0;
+    std::string stop_rule;
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand("relax", "Relax a packing in LIGGGHTS or YADE and read the result back");
@@ -33,6 +36,13 @@ Runner add_relax_command(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--max-time", o->max_time, "simulated time limit [s] (default: the scene's relax.max_time)")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--damping", o->damping,
+                  "quasi-static damping in [0, 1): YADE's NewtonIntegrator damping, LIGGGHTS' fix viscous of equal "
+                  "dissipation per oscillation (default: the scene's relax.damping, 0 = off)")
+      ->check(CLI::Range(0.0, 0.999999));
+  cmd->add_option("--stop-rule", o->stop_rule,
+                  "kinetic-energy | unbalanced-force | displacement (default: the scene's relax.stop_rule)")
+      ->check(CLI::IsMember({"kinetic-energy", "unbalanced-force", "displacement"}));
   cmd->add_option("--max-overlap", o->settings.max_overlap,
                   "refuse packings whose largest overlap / smaller radius exceeds this")
       ->capture_default_str()
@@ -49,12 +59,21 @@ Runner add_relax_command(CLI::App& app) {
       PackingWithScene p = load_packing_with_scene(o->packing);
       if (cmd->count("--timestep")) o->settings.timestep = o->timestep;
       if (cmd->count("--max-time")) p.scene.relax.max_time = o->max_time;
+      if (cmd->count("--damping")) o->settings.damping = o->damping;
+      if (!o->stop_rule.empty()) p.scene.relax.stop_rule = o->stop_rule;
       const std::string engine = o->engine.empty() ? p.scene.relax.engine : o->engine;
-      const btr::RelaxResult r = btr::relax(p.packing, p.scene, engine, o->settings, o->out);
-      std::cout << engine << ": stopped by " << r.stop_reason << " at t = " << r.simulated_time << " s after "
-                << r.wall_seconds << " s wall time; final kinetic energy "
-                << (r.kinetic_history.empty() ? 0.0 : r.kinetic_history.back().second) << " J; " << r.contacts.size()
-                << " contacts\n"
+      btr::RelaxResult r = btr::relax(p.packing, p.scene, engine, o->settings, o->out);
+      // The relaxed packing's measures, by the same definition as the deposit's, stored in relaxed.json.
+      r.relaxed.meta["measures"] = measures_to_json(measure_in_scene(r.relaxed.grains, p.scene));
+      btr::write_packing_meta(o->out, "relaxed", r.relaxed.meta);
+      std::cout << engine << ": stopped by " << r.stop_reason << " (rule: " << p.scene.relax.stop_rule
+                << ") at t = " << r.simulated_time << " s after " << r.wall_seconds
+                << " s wall time; final kinetic energy "
+                << (r.kinetic_history.empty() ? 0.0 : r.kinetic_history.back().second) << " J; unbalanced force "
+                << r.final_unbalanced_force << "; " << r.contacts.size() << " contacts\n";
+      if (p.scene.container.kind == btr::ContainerKind::Open)
+        std::cout << "open floor: " << r.removed.size() << " grain(s) left the region and were removed\n";
+      std::cout
                 << "wrote " << o->out << "/relaxed.csv (.json, .vtp), kinetic.csv, contacts.csv, velocities.csv\n";
       return kSuccess;
     } catch (const btr::EngineFailure& e) {

@@ -15,5 +15,8 @@ Runner add_deposit_command(CLI::App& app);
 Runner add_bench_command(CLI::App& app);
 Runner add_relax_command(CLI::App& app);
 Runner add_export_command(CLI::App& app);
+Runner add_measure_command(CLI::App& app);
+Runner add_shake_command(CLI::App& app);
+Runner add_drum_command(CLI::App& app);
 
 }  // namespace btr_app

@@ -232,6 +232,14 @@ Walls walls_of(const Container& c, int dimension, const Vec3& p, double r) {
       w.push_back({c.radius - rho - r, n});
       break;
     }
+    case ContainerKind::Drum: {
+      // Axis along y at height z = radius; the gap is measured to the circle of the drum's section.
+      if (dimension == 3) pair_of_planes(1, 0.5 * c.size_y);
+      const double dx = p.x(), dz = p.z() - c.radius, rho = std::hypot(dx, dz);
+      const Vec3 n = rho > 0 ? Vec3(-dx / rho, 0, -dz / rho) : Vec3(0, 0, 1);
+      w.push_back({c.radius - rho - r, n});
+      break;
+    }
   }
   return w;
 }

@@ -9,6 +9,7 @@ const char* to_string(ContainerKind kind) {
     case ContainerKind::Periodic: return "periodic";
     case ContainerKind::HeleShaw: return "hele-shaw";
     case ContainerKind::Cylinder: return "cylinder";
+    case ContainerKind::Drum: return "drum";
   }
   return "?";
 }

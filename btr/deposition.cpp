@@ -92,9 +92,13 @@ struct Deposition::Impl {
   const Grain& place(const Drop& drop);
   void fall(Vec3& x, double r, Contacts& active, const std::vector<Obstacle>& walls);
   void roll_on_arc(Vec3& x, double r, Contacts& active, const CircleArc& arc, const std::vector<Obstacle>& walls);
+  bool roll_along_drum(Vec3& x, double r, Contacts& active, int sphere, int drum, const std::vector<Obstacle>& walls);
+  bool drum_rest(const Vec3& x, const Contacts& active) const;
+  void drum_start(Vec3& x, double z, double r) const;
   bool roll_along_cylinder(Vec3& x, double r, Contacts& active, int sphere, int cylinder, const Vec3& d,
                            const std::vector<Obstacle>& walls);
   bool at_bottom(const Vec3& x, const Contacts& active) const;
+  double free_start(double x, double y, double z, double r) const;
   Vec3 tie_break(const Vec3& x, const Contacts& active, std::uint64_t salt) const;
 };
 
@@ -117,6 +121,15 @@ void Deposition::Impl::fall(Vec3& x, double r, Contacts& active, const std::vect
         if (z_hit > x.z() + tol || active.has(o.key)) return;
         ev.offer(x.z() - z_hit, o, tol);
       });
+  if (container.kind == ContainerKind::Drum) {
+    // The drum's lower wall below x: z = z_axis - sqrt(R^2 - x^2).
+    const Obstacle& w = walls.back();
+    const double s = w.R * w.R - x.x() * x.x();
+    if (s > 0.0 && !active.has(w.key)) {
+      const double z_hit = w.c.z() - std::sqrt(s);
+      if (z_hit <= x.z() + tol) ev.offer(x.z() - z_hit, w, tol);
+    }
+  }
   x.z() -= ev.t;
   for (int k = 0; k < ev.hits.n; ++k) active.add(ev.hits.item[k]);
 }
@@ -171,12 +184,41 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
     }
   };
 
-  for (const Obstacle& w : walls) {
-    if (w.kind == Obstacle::Kind::Cylinder) offer_cylinder(w);
-    else offer_plane(w);
-  }
   Vec3 lo, hi;
   arc.bounds(lo, hi);
+  auto offer_drum = [&](const Obstacle& o) {
+    if (active.has(o.key)) return;
+    // The arc lies inside the drum's centre surface (its box does, or its circle does: the distance of
+    // any point of it from the axis is at most that of C plus rho): no contact possible.
+    const double fx = std::max(std::abs(lo.x()), std::abs(hi.x()));
+    const double fz = std::max(std::abs(lo.z() - o.c.z()), std::abs(hi.z() - o.c.z()));
+    if (fx * fx + fz * fz < o.R * o.R * (1.0 - 1e-9)) return;
+    const double cz = arc.C.z() - o.c.z();
+    if (std::sqrt(arc.C.x() * arc.C.x() + cz * cz) + arc.rho < o.R * (1.0 - 1e-9)) return;
+    if (std::abs(arc.u.y()) > 1e-12 || std::abs(arc.v.y()) > 1e-12) {
+      offer_cylinder(o);  // squared distance from the axis is of degree 2 in cos t, sin t: sample
+      return;
+    }
+    // An arc in a plane y = const: squared distance from the axis D(t) = K + a cos t + b sin t; the
+    // grain enters the wall where D rises through R^2.
+    Vec3 w = arc.C - o.c;
+    w.y() = 0.0;
+    const double K = w.squaredNorm() + arc.rho * arc.rho;
+    const double a = 2.0 * arc.rho * w.dot(arc.u), b = 2.0 * arc.rho * w.dot(arc.v);
+    const double R2 = o.R * o.R;
+    const bool touching = std::abs(K + a - R2) <= 1e-9 * R2;
+    if (touching && b > 2.0 * kApproach * arc.rho * o.R) { ev.offer(0.0, o, t_tol); return; }
+    double t = first_rising_root(a, b, R2 - K, touching ? kSkipTangency : 0.0, ev.t + t_tol);
+    if (t >= 0.0) ev.offer(t, o, t_tol);
+  };
+  // In a drum the floor only touches the drum's lowest line, where the drum wall is met first.
+  const bool drum_container = container.kind == ContainerKind::Drum;
+  for (const Obstacle& w : walls) {
+    if (w.kind == Obstacle::Kind::Cylinder) offer_cylinder(w);
+    else if (w.kind == Obstacle::Kind::Drum) offer_drum(w);
+    else if (drum_container && w.is_floor()) continue;
+    else offer_plane(w);
+  }
   const Vec3 reach = Vec3::Constant(r + r_max);
   grid.visit_box(lo - reach, hi + reach, [&](std::int32_t i, const Vec3& c, double radius, int image) {
     const double R = r + radius;
@@ -315,6 +357,158 @@ bool Deposition::Impl::roll_along_cylinder(Vec3& x, double r, Contacts& active, 
 }
 
 // ---------------------------------------------------------------------------------------------
+// A given start height (dynamic BTR), raised above the floor and then straight up out of every fixed
+// grain it overlaps (each lift can only meet grains higher up, so this ends).
+double Deposition::Impl::free_start(double x, double y, double z, double r) const {
+  z = std::max(z, r);
+  const double reach = r + r_max;
+  for (bool moved = true; moved;) {
+    moved = false;
+    grid.visit_box(Vec3(x - reach, y - reach, z - reach), Vec3(x + reach, y + reach, z + reach),
+                   [&](std::int32_t, const Vec3& c, double radius, int) {
+                     const double R = r + radius, dx = x - c.x(), dy = y - c.y(), dz = z - c.z();
+                     if (dx * dx + dy * dy + dz * dz >= R * R * (1.0 - 1e-12)) return;
+                     const double up = c.z() + std::sqrt(std::max(0.0, R * R - dx * dx - dy * dy));
+                     if (up > z) z = up, moved = true;
+                   });
+  }
+  return z;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The drum: a start inside the drum's section at x (a lifted grain never leaves the drum), moved
+// straight up out of fixed grains. Near the wall the section is short: when the fixed grains fill it
+// up to the wall, the start moves inwards in steps of one radius to the first column with room.
+void Deposition::Impl::drum_start(Vec3& x, double z, double r) const {
+  const double Rc = container.radius - r, za = container.radius;
+  const double x0 = x.x(), inward = x0 > 0.0 ? -1.0 : 1.0;
+  for (int k = 0; k * r <= std::abs(x0) + r; ++k) {
+    const double xk = k * r >= std::abs(x0) ? 0.0 : x0 + inward * k * r;
+    const double half_chord = std::sqrt(std::max(0.0, Rc * Rc - xk * xk));
+    const double top_inside = za + half_chord;
+    const double zk = free_start(xk, x.y(), std::clamp(z, za - half_chord, top_inside), r);
+    if (zk <= top_inside + 1e-12 * r) {
+      x.x() = xk;
+      x.z() = std::min(zk, top_inside);
+      return;
+    }
+  }
+  std::ostringstream why;
+  why << "no room in the drum for a grain dropped at x = " << x0 << ": the grains already placed fill it";
+  throw PlacementError(static_cast<std::int64_t>(grains.size()) + 1, why.str());
+}
+
+// At rest on the drum wall: alone or with an end wall (gravity balanced only on the lowest line), or
+// with one grain at the lowest point of their common curve (heights either way along it are higher,
+// or the curve ends there).
+bool Deposition::Impl::drum_rest(const Vec3& x, const Contacts& active) const {
+  int di = -1, si = -1, spheres = 0;
+  for (int i = 0; i < active.n; ++i) {
+    if (active.item[i].kind == Obstacle::Kind::Drum) di = i;
+    if (active.item[i].kind == Obstacle::Kind::Sphere) ++spheres, si = i;
+  }
+  if (di < 0) return false;
+  if (spheres == 0) return true;
+  if (spheres > 1 || dimension == 2) return false;
+  const Obstacle& w = active.item[di];
+  const Obstacle& p = active.item[si];
+  const double theta = std::atan2(x.x(), w.c.z() - x.z()), dtheta = 1e-4;
+  for (double f : {theta - dtheta, theta + dtheta}) {
+    const double px = w.R * std::sin(f), pz = w.c.z() - w.R * std::cos(f);
+    const double s = p.R * p.R - (px - p.c.x()) * (px - p.c.x()) - (pz - p.c.z()) * (pz - p.c.z());
+    if (s >= 0.0 && pz < x.z()) return false;
+  }
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Roll on one grain while pressed against the drum wall (3D). As for the vertical cylinder, the path
+// (centre on the drum's centre surface at distance R_p from the support) is not a circle: it is
+// followed in small steps of the angle theta about the axis (height z_axis - R cos theta), each event
+// located by bisection. y comes from the support: y = y_p +- sqrt(R_p^2 - (x - x_p)^2 - (z - z_p)^2).
+// The path goes down, towards theta = 0; it ends at theta = 0 or where the two branches meet (y = y_p),
+// the lowest point of the closed curve. Returns true when the grain comes to rest there.
+bool Deposition::Impl::roll_along_drum(Vec3& x, double r, Contacts& active, int si, int di,
+                                       const std::vector<Obstacle>& walls) {
+  const Obstacle p = active.item[si];
+  const Obstacle drum = active.item[di];
+  const double Rc = drum.R, za = drum.c.z();
+  double theta = std::atan2(x.x(), za - x.z());
+  const double sign = theta > 0.0 ? -1.0 : 1.0;
+  const double yside = x.y() >= p.c.y() ? 1.0 : -1.0;
+  auto at = [&](double f) -> std::pair<Vec3, bool> {
+    Vec3 P(Rc * std::sin(f), 0.0, za - Rc * std::cos(f));
+    const double s = p.R * p.R - (P.x() - p.c.x()) * (P.x() - p.c.x()) - (P.z() - p.c.z()) * (P.z() - p.c.z());
+    if (s < 0.0) return {P, false};
+    P.y() = p.c.y() + yside * std::sqrt(s);
+    return {P, true};
+  };
+  const Vec3 z = Vec3::UnitZ();
+  const double gap_tol = 1e-12 * r;
+  std::vector<Obstacle> candidates;
+  // 0: continue; 1: new contact; 2: lift off p; 3: lift off the drum; 4: lowest point passed.
+  auto condition = [&](double f) -> int {
+    auto [P, ok] = at(f);
+    if (!ok) return 4;
+    if (sign * f > 0.0) return 4;
+    for (const Obstacle& o : candidates)
+      if (!active.has(o.key) && o.gap(P) < -gap_tol) return 1;
+    for (const Obstacle& w : walls)
+      if (w.key != drum.key && !w.is_floor() && w.gap(P) < -gap_tol) return 1;
+    const double s = p.R * p.R - (P.x() - p.c.x()) * (P.x() - p.c.x()) - (P.z() - p.c.z()) * (P.z() - p.c.z());
+    const double dx = Rc * std::cos(f), dz = Rc * std::sin(f);
+    const double dy = -yside * ((P.x() - p.c.x()) * dx + (P.z() - p.c.z()) * dz) / std::sqrt(std::max(s, 1e-300));
+    const Vec3 T = Vec3(sign * dx, sign * dy, sign * dz).normalized();
+    const Vec3 g_perp = z - z.dot(T) * T;
+    const Vec3 np = p.normal(P), nc = drum.normal(P);
+    Eigen::Matrix2d A;
+    A << np.dot(np), np.dot(nc), nc.dot(np), nc.dot(nc);
+    const Eigen::Vector2d f2 = A.inverse() * Eigen::Vector2d(np.dot(g_perp), nc.dot(g_perp));
+    if (f2(0) < 0.0) return 2;
+    if (f2(1) < 0.0) return 3;
+    return 0;
+  };
+  const double step = sign * 0.05 * r / Rc;
+  const double reach = 2.0 * r + 2.0 * r_max;
+  for (int chunk = 0; chunk < 1000; ++chunk) {
+    candidates.clear();
+    const Vec3 here = at(theta).first;
+    const Vec3 span = Vec3::Constant(reach + 20 * std::abs(step) * Rc);
+    grid.visit_box(here - span, here + span, [&](std::int32_t i, const Vec3& c, double radius, int image) {
+      candidates.push_back(sphere(i, c, radius, image, r));
+    });
+    for (int k = 0; k < 20; ++k) {
+      if (condition(theta + step) == 0) {
+        theta += step;
+        continue;
+      }
+      double f0 = theta, f1 = theta + step;
+      for (int it = 0; it < 200 && std::abs(f1 - f0) > 1e-15; ++it) {
+        const double fm = 0.5 * (f0 + f1);
+        (condition(fm) == 0 ? f0 : f1) = fm;
+      }
+      x = at(f0).first;
+      switch (condition(f1)) {
+        case 1: {
+          const Vec3 P1 = at(f1).first;
+          for (const Obstacle& o : candidates)
+            if (o.gap(P1) < -gap_tol) active.add(o);
+          for (const Obstacle& w : walls)
+            if (w.key != drum.key && !w.is_floor() && w.gap(P1) < -gap_tol) active.add(w);
+          return false;
+        }
+        case 2: active.remove(si); return false;
+        case 3: active.remove(di); return false;
+        case 4: return true;  // the lowest point of the curve
+        default: theta = f1; continue;
+      }
+    }
+  }
+  x = at(theta).first;
+  return false;
+}
+
+// ---------------------------------------------------------------------------------------------
 // With the weight carried by two supports, is the grain at the bottom of their common curve?
 bool Deposition::Impl::at_bottom(const Vec3& x, const Contacts& active) const {
   const Obstacle& a = active.item[0];
@@ -374,9 +568,14 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
   if (!misfit.empty()) throw PlacementError(id, "dropped outside the container: " + misfit);
 
   container_walls(container, dimension, r, walls);
-  Vec3 x(px, py, top + r + 2.0 * r_max);
+  Vec3 x(px, py, 0.0);
+  if (container.kind == ContainerKind::Drum)
+    drum_start(x, std::isnan(drop.z) ? top + r + 2.0 * r_max : drop.z, r);
+  else
+    x.z() = std::isnan(drop.z) ? top + r + 2.0 * r_max : free_start(px, py, drop.z, r);
   Contacts active;
   bool stable = false;
+  int drum_stalls = 0;
   for (int event = 0; event < max_events && !stable; ++event) {
     Vec3 normals[kMaxContacts];
     for (int i = 0; i < active.n; ++i) normals[i] = active.item[i].normal(x);
@@ -388,11 +587,16 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
     Vec3 d = descent.direction;
     // Gravity balanced by as many independent supports as the dimension: d is round-off.
     if (active.n >= dimension) d = Vec3::Zero();
+    // On the drum's lowest line the wall's normal is vertical up to round-off: what is left of gravity
+    // is round-off too (it would only start arcs of length ~1e-8 that end where they began).
+    if (container.kind == ContainerKind::Drum && d.squaredNorm() < 1e-18) d = Vec3::Zero();
 
     if (d.isZero()) {
       bool on_floor = false;
       for (int i = 0; i < active.n; ++i) on_floor |= active.item[i].is_floor();
-      if (on_floor || active.n >= dimension || (active.n == 2 && at_bottom(x, active))) {
+      const bool drum = container.kind == ContainerKind::Drum;
+      if (on_floor || active.n >= dimension || (drum && drum_rest(x, active)) ||
+          (!drum && active.n == 2 && at_bottom(x, active))) {
         stable = true;
         break;
       }
@@ -402,12 +606,44 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
       if (d.isZero()) { stable = true; break; }
     }
 
-    int spheres = 0, planes = 0, cylinders = 0, si = -1, pi = -1, ci = -1;
+    int spheres = 0, planes = 0, cylinders = 0, drums = 0, si = -1, pi = -1, ci = -1, di = -1;
     for (int i = 0; i < active.n; ++i) {
       switch (active.item[i].kind) {
         case Obstacle::Kind::Sphere: ++spheres; si = si < 0 ? i : si; break;
         case Obstacle::Kind::Plane: ++planes; pi = i; break;
         case Obstacle::Kind::Cylinder: ++cylinders; ci = i; break;
+        case Obstacle::Kind::Drum: ++drums; di = i; break;
+      }
+    }
+    if (drums == 1) {
+      if (spheres == 0) {
+        // On the drum wall (and maybe an end wall): a circle about the axis, down to its lowest point.
+        CircleArc arc;
+        const Obstacle& w = active.item[di];
+        arc.C = Vec3(0.0, x.y(), w.c.z());
+        arc.rho = w.R;
+        arc.u = (x - arc.C).normalized();
+        arc.v = Vec3::UnitY().cross(arc.u);
+        if (arc.v.dot(d) < 0.0) arc.v = -arc.v;
+        const double t_low = std::atan2(-arc.v.z(), -arc.u.z());
+        if (t_low <= 1e-12 || t_low >= M_PI) {  // on the lowest line already (up to round-off)
+          stable = true;
+          break;
+        }
+        arc.t_end = t_low;
+        const Vec3 before = x;
+        roll_on_arc(x, r, active, arc, walls);
+        // Wedged a hair (~1e-8 rad) beside the lowest line against a grain that the descent, at round-off,
+        // finds unloaded: the arc stops where it starts, again and again. The grain is at rest there.
+        if ((x - before).squaredNorm() <= 1e-24 * r * r && ++drum_stalls >= 3) {
+          stable = true;
+          break;
+        }
+        continue;
+      }
+      if (spheres == 1 && planes == 0 && cylinders == 0 && dimension == 3) {
+        if (roll_along_drum(x, r, active, si, di, walls)) stable = true;
+        continue;
       }
     }
     if (spheres == 0) {
@@ -422,7 +658,8 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
       arc.u = (x - p.c).normalized();
       arc.v = (d - d.dot(arc.u) * arc.u).normalized();
       arc.t_end = std::max(0.0, std::atan2(arc.u.z(), -arc.v.z()));  // the support's equator
-    } else if ((spheres == 2 && planes == 0 && cylinders == 0) || (spheres == 1 && planes == 1 && cylinders == 0)) {
+    } else if (drums == 0 && ((spheres == 2 && planes == 0 && cylinders == 0) ||
+                              (spheres == 1 && planes == 1 && cylinders == 0))) {
       Vec3 axis;
       if (spheres == 2) {
         int qi = si + 1;
@@ -453,13 +690,13 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
       double t_low = std::atan2(-arc.v.z(), -arc.u.z());
       if (t_low <= 0.0) t_low += kTwoPi;
       arc.t_end = t_low;  // the lowest point of the circle
-    } else if (spheres == 1 && cylinders == 1 && planes == 0) {
+    } else if (spheres == 1 && cylinders == 1 && planes == 0 && drums == 0) {
       if (roll_along_cylinder(x, r, active, si, ci, d, walls)) stable = true;
       continue;
     } else {
       std::ostringstream why;
       why << "no rule for rolling on " << spheres << " grains, " << planes << " walls and " << cylinders
-          << " cylinders at (" << x.x() << ", " << x.y() << ", " << x.z() << ")";
+          << " cylinders" << (drums ? " and a drum wall" : "") << " at (" << x.x() << ", " << x.y() << ", " << x.z() << ")";
       throw PlacementError(id, why.str());
     }
     roll_on_arc(x, r, active, arc, walls);
@@ -468,6 +705,9 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
     std::ostringstream why;
     why << "no stable position after " << max_events << " events; last at (" << x.x() << ", " << x.y() << ", "
         << x.z() << ") with " << active.n << " contacts";
+    const char* names[] = {"grain", "plane", "cylinder", "drum"};
+    for (int i = 0; i < active.n; ++i) why << (i ? ", " : " (") << names[static_cast<int>(active.item[i].kind)];
+    if (active.n) why << ")";
     throw PlacementError(id, why.str());
   }
   if (container.kind == ContainerKind::Periodic) {

@@ -2,6 +2,7 @@
 // The BTR placement engine: grains are dropped one at a time and each falls, rolls over the grains
 // already fixed and stops where gravity is balanced by its supports (DESIGN.md section 3).
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -12,10 +13,14 @@
 namespace btr {
 
 // One grain to place: where it is dropped (x, y; y is ignored in 2D) and its size.
+// z is the height its centre starts from: NaN (the default) drops it from above the pile; a number
+// starts it there (dynamic BTR: a lifted grain falls from its lifted position). A start inside a
+// fixed grain is moved straight up until free, so the grain falls onto what is already fixed.
 struct Drop {
   double x = 0.0, y = 0.0;
   double r = 0.0;
   int species = 1;
+  double z = std::numeric_limits<double>::quiet_NaN();
 };
 
 // A grain that could not be placed (event budget exhausted, a drop outside the container, ...).

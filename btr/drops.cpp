@@ -72,6 +72,13 @@ DropSequence::DropSequence(const Scene& scene, std::uint64_t seed)
     for (const auto& d : listed_) r_min_ = std::min(r_min_, d.r), r_max_ = std::max(r_max_, d.r);
     return;
   }
+  if (scene.intruder) {
+    // Dropped first and drawing no random numbers, so the bed's drops are those of the scene without it.
+    intruder_ = scene.intruder;
+    ++count_;
+    const double r = scene.intruder->diameter_ratio * components_[0].radius.value;
+    r_min_ = std::min(r_min_, r), r_max_ = std::max(r_max_, r);
+  }
   const auto fractions = number_fractions(scene.grains, dimension_);
   double cum = 0.0;
   for (std::size_t i = 0; i < components_.size(); ++i) {
@@ -147,6 +154,10 @@ void DropSequence::position(double r, Drop& d) {
     case SourceSpec::Kind::Rain:
       switch (c.kind) {
         case ContainerKind::Cylinder: disk(c.radius - r, d.x, d.y); break;
+        case ContainerKind::Drum:  // over the drum's width, clear of its end walls
+          d.x = -(c.radius - r) + uniform() * 2.0 * (c.radius - r);
+          if (three) d.y = (-0.5 * c.size_y + r) + uniform() * (c.size_y - 2.0 * r);
+          break;
         case ContainerKind::Periodic:
           d.x = -0.5 * c.size_x + uniform() * c.size_x;
           if (three) d.y = -0.5 * c.size_y + uniform() * c.size_y;
@@ -171,6 +182,13 @@ Drop DropSequence::next() {
   if (drawn_ >= count_)
     throw std::out_of_range("DropSequence: all " + std::to_string(count_) + " drops were already drawn");
   Drop d;
+  if (intruder_ && drawn_ == 0) {
+    d.x = intruder_->x, d.y = dimension_ == 3 ? intruder_->y : 0.0;
+    d.r = intruder_->diameter_ratio * components_[0].radius.value;
+    d.species = intruder_->species;
+    ++drawn_;
+    return d;
+  }
   if (source_.kind == SourceSpec::Kind::List) {
     const ListedDrop& l = listed_[static_cast<std::size_t>(drawn_)];
     d.x = l.x, d.y = l.y, d.r = l.r, d.species = l.species;

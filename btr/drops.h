@@ -7,8 +7,10 @@
 //   2. the radius (uniform, constant-mass: one draw; constant, list: none);
 //   3. the position: point in 2D one draw (segment), in 3D a disk by rejection (pairs of draws until
 //      inside); rain and region one draw per axis (cylinder: a disk by rejection); list: none.
+// A scene's [intruder] is the first drop (no draws), before the count bed grains.
 // Only +, -, *, / and sqrt touch the draws, so the sequence is bit-identical on any IEEE machine.
 #include <cstdint>
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -51,6 +53,7 @@ class DropSequence {
   std::vector<double> cumulative_;     // cumulative number fractions
   std::vector<std::size_t> list_pos_;  // next index of each component's radius list
   std::vector<ListedDrop> listed_;
+  std::optional<IntruderSpec> intruder_;  // the first drop, when the scene has one
   std::mt19937_64 rng_;
   std::int64_t count_ = 0, drawn_ = 0;
   double r_min_ = 0.0, r_max_ = 0.0;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
 
 namespace btr {
 namespace {
@@ -146,6 +147,7 @@ class Cells {
       hi = hi.cwiseMax(g.x);
     }
     if (dimension == 2) lo.y() = hi.y() = 0.0;
+    dim3_ = dimension == 3;
     // Keep the dense cell array at most a few times the number of grains.
     for (;;) {
       for (int a = 0; a < 3; ++a) {
@@ -177,16 +179,23 @@ class Cells {
     order_.resize(grains.size());
     std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
     for (std::size_t i = 0; i < grains.size(); ++i) order_[fill[cell[i]]++] = static_cast<std::uint32_t>(i);
+    sorted_.resize(grains.size());
+    for (std::size_t p = 0; p < order_.size(); ++p) sorted_[p] = grains[order_[p]].x;
   }
 
-  // Calls f(j) for every grain j in the cells around position x (each cell once).
+  // Grain indices in cell order: visiting centres in this order keeps the neighbour cells in cache.
+  const std::vector<std::uint32_t>& order() const { return order_; }
+
+  // Calls f(j, centre of j) for every grain j in the cells within `reach` cells of position x's cell (each cell once).
   template <class F>
-  void for_neighbours(const Vec3& x, F&& f) const {
+  void for_neighbours(const Vec3& x, F&& f, int reach = 1) const {
+    constexpr int kMaxReach = 4;
+    reach = std::clamp(reach, 1, kMaxReach);
     std::array<int, 3> c = coords(x);
-    std::array<std::array<int, 3>, 3> idx;
+    std::array<std::array<int, 2 * kMaxReach + 1>, 3> idx;
     std::array<int, 3> count{};
     for (int a = 0; a < 3; ++a) {
-      for (int d = -1; d <= 1; ++d) {
+      for (int d = -reach; d <= reach; ++d) {
         int k = c[a] + d;
         if (periodic_[a]) k = ((k % n_[a]) + n_[a]) % n_[a];
         else if (k < 0 || k >= n_[a]) continue;
@@ -199,15 +208,23 @@ class Cells {
       for (int j = 0; j < count[1]; ++j)
         for (int k = 0; k < count[2]; ++k) {
           std::size_t cell = index({idx[0][i], idx[1][j], idx[2][k]});
-          for (std::uint32_t p = start_[cell]; p < start_[cell + 1]; ++p) f(order_[p]);
+          for (std::uint32_t p = start_[cell]; p < start_[cell + 1]; ++p) f(order_[p], sorted_[p]);
         }
+  }
+
+  // The narrowest cell side (axes in use).
+  double width() const {
+    double w = std::min(size_[0], size_[2]);
+    return dim3_ ? std::min(w, size_[1]) : w;
   }
 
   // Shortest separation vector from b to a (minimum image across periodic sides).
   Vec3 separation(const Vec3& a, const Vec3& b) const {
     Vec3 d = a - b;
-    for (int k = 0; k < 3; ++k)
-      if (periodic_[k]) d[k] -= period_[k] * std::round(d[k] / period_[k]);
+    for (int k = 0; k < 3; ++k) {
+      if (!periodic_[k]) continue;
+      if (std::abs(d[k]) > 0.5 * period_[k]) d[k] -= period_[k] * std::round(d[k] / period_[k]);
+    }
     return d;
   }
 
@@ -225,16 +242,18 @@ class Cells {
     return (std::size_t(c[2]) * n_[1] + c[1]) * n_[0] + c[0];
   }
 
+  bool dim3_ = true;
   bool periodic_[3] = {false, false, false};
   double period_[3] = {0, 0, 0}, origin_[3] = {0, 0, 0}, size_[3] = {1, 1, 1};
   int n_[3] = {1, 1, 1};
   std::vector<std::uint32_t> start_, order_;
+  std::vector<Vec3> sorted_;  // grain centres in cell order, contiguous for the neighbour loops
 };
 
 // ---------------------------------------------------------------- free surface
 
 // The free surface seen from above: the lateral rectangle cut into columns about one largest diameter
-// wide, each with the highest grain top among the grains centred in it (0 if none).
+// wide (at least one), each with the highest grain top among the grains centred in it (0 if none).
 struct HeightMap {
   int nx = 1, ny = 1;
   std::vector<double> ex, ey;  // column edges (2D: ey = {0, 1})
@@ -245,7 +264,8 @@ HeightMap height_map(const Grains& grains, int dimension, double x0, double x1, 
                      int max_columns) {
   HeightMap h;
   auto edges = [&](double a, double b, int& n, std::vector<double>& e) {
-    n = std::clamp(static_cast<int>(std::ceil((b - a) / width - 1e-9)), 1, max_columns);
+    // at least `width` wide: a narrower column can hold no grain centre and read as a hole in the surface
+    n = std::clamp(static_cast<int>(std::floor((b - a) / width + 1e-9)), 1, max_columns);
     e.resize(n + 1);
     for (int k = 0; k <= n; ++k) e[k] = a + (b - a) * k / n;
   };
@@ -264,6 +284,33 @@ HeightMap height_map(const Grains& grains, int dimension, double x0, double x1, 
   }
   return h;
 }
+
+}  // namespace
+
+double mean_surface_height(const Grains& grains, int dimension, const Container& container, double width) {
+  if (grains.empty()) return 0.0;
+  double x0, x1, y0 = 0.0, y1 = 0.0;
+  switch (container.kind) {
+    case ContainerKind::Box:
+    case ContainerKind::Periodic:
+      x1 = 0.5 * container.size_x, y1 = 0.5 * container.size_y;
+      break;
+    case ContainerKind::HeleShaw: x1 = 0.5 * container.size_x, y1 = 0.5 * container.gap; break;
+    case ContainerKind::Cylinder: x1 = y1 = container.radius / std::sqrt(2.0); break;
+    default:
+      x1 = y1 = 0.0;
+      for (const Grain& g : grains) x1 = std::max(x1, std::abs(g.x.x())), y1 = std::max(y1, std::abs(g.x.y()));
+  }
+  x0 = -x1, y0 = -y1;
+  const HeightMap h = height_map(grains, dimension, x0, x1, y0, y1, width, 1 << 20);
+  double sum = 0.0;
+  int n = 0;
+  for (double t : h.top)
+    if (t > 0.0) sum += t, ++n;
+  return n ? sum / n : 0.0;
+}
+
+namespace {
 
 struct Span {
   double extent = 0.0, height = 0.0;  // (edge[last + 1] - edge[first]) and the least height over it
@@ -312,6 +359,10 @@ std::string fmt(const char* format, double a, double b = 0.0) {
 
 // ---------------------------------------------------------------- public
 
+bool in_bulk_window(const BulkMeasures& bulk, const Vec3& x, int dimension) {
+  return bulk.slab ? (x.z() >= bulk.window.lo.z() && x.z() <= bulk.window.hi.z()) : in_window(x, dimension, bulk.window);
+}
+
 std::vector<int> coordination_numbers(const Grains& grains, int dimension, const Container& container,
                                       double contact_tol) {
   std::vector<int> z(grains.size(), 0);
@@ -320,10 +371,10 @@ std::vector<int> coordination_numbers(const Grains& grains, int dimension, const
   Cells cells(grains, dimension, container, 2.0 * r_max * (1.0 + 2.0 * contact_tol) * 1.0001);
   for (std::size_t i = 0; i < grains.size(); ++i) {
     const Grain& gi = grains[i];
-    cells.for_neighbours(gi.x, [&](std::uint32_t j) {
+    cells.for_neighbours(gi.x, [&](std::uint32_t j, const Vec3& xj) {
       if (j <= i) return;
       const Grain& gj = grains[j];
-      const double gap = cells.separation(gi.x, gj.x).norm() - gi.r - gj.r;
+      const double gap = cells.separation(gi.x, xj).norm() - gi.r - gj.r;
       if (gap < contact_tol * std::min(gi.r, gj.r)) {
         ++z[i];
         ++z[j];
@@ -364,6 +415,11 @@ BulkMeasures bulk_measures(const Grains& grains, int dimension, const Container&
   BulkMeasures m;
   if (grains.empty()) {
     m.note = "no grains";
+    return m;
+  }
+  if (container.kind == ContainerKind::Drum) {
+    // A box under the surface would reach below the drum's curved wall, where there are no grains.
+    m.note = "no bulk window in a drum (its floor is the curved wall); see the drum measures of `btr drum`";
     return m;
   }
   const double d = 2.0 * max_radius(grains);
@@ -456,10 +512,7 @@ BulkMeasures bulk_measures(const Grains& grains, int dimension, const Container&
   const std::vector<int>& z = computed.empty() ? *coordination : computed;
   std::int64_t total = 0;
   for (std::size_t i = 0; i < grains.size(); ++i) {
-    const Vec3& x = grains[i].x;
-    bool inside = m.slab ? (x.z() >= m.window.lo.z() && x.z() <= m.window.hi.z())
-                         : in_window(x, dimension, m.window);
-    if (!inside) continue;
+    if (!in_bulk_window(m, grains[i].x, dimension)) continue;
     ++m.grains_in_window;
     total += z[i];
     if (static_cast<std::size_t>(z[i]) >= m.coordination_histogram.size())
@@ -477,71 +530,287 @@ BulkMeasures bulk_measures(const Grains& grains, int dimension, const Container&
 
 namespace {
 
-struct ProfilePoint {
-  double distance, top;
-};
-
-// Highest grain per bin of `distance` (bins `width` wide); each point is that grain's own distance and top.
-std::vector<ProfilePoint> profile(const std::vector<ProfilePoint>& samples, double width) {
+// Profile bins of |distance| (one largest diameter wide), in order of distance, empty bins kept as
+// top < 0 so the pile can stop at the first gap.
+std::vector<ProfilePoint> binned_profile(const std::vector<ProfilePoint>& samples, double width) {
   std::vector<ProfilePoint> best;
-  std::vector<bool> used;
   for (const ProfilePoint& s : samples) {
-    std::size_t bin = static_cast<std::size_t>(s.distance / width);
-    if (bin >= best.size()) best.resize(bin + 1, {0.0, -1.0}), used.resize(bin + 1, false);
-    if (!used[bin] || s.top > best[bin].top) best[bin] = s, used[bin] = true;
+    const std::size_t bin = static_cast<std::size_t>(s.distance / width);
+    if (bin >= best.size()) best.resize(bin + 1, {0.0, -1.0});
+    if (s.top > best[bin].top) best[bin] = s;
   }
-  std::vector<ProfilePoint> out;
-  for (std::size_t b = 0; b < best.size(); ++b)
-    if (used[b]) out.push_back(best[b]);
-  return out;
+  return best;
 }
 
-// Angle (degrees) of the least-squares line through the points whose top lies in [lo, hi].
-bool fit_angle(const std::vector<ProfilePoint>& points, double lo, double hi, double& angle, int& used) {
+struct Flank {
+  bool ok = false;
+  double angle = 0.0;
+  int points = 0;
+  double foot = 0.0;  // distance of the last bin of the pile run that was looked at
+};
+
+// The flank of one side: walk from the apex bin outwards; fit from the first bin at or below hi to the
+// last bin before the profile falls below lo or meets an empty bin.
+Flank fit_flank(const std::vector<ProfilePoint>& bins, double lo, double hi) {
+  Flank f;
+  std::size_t apex = 0;
+  for (std::size_t b = 0; b < bins.size(); ++b)
+    if (bins[b].top > bins[apex].top) apex = b;
   double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
-  for (const ProfilePoint& p : points) {
-    if (p.top < lo || p.top > hi) continue;
+  f.foot = bins.empty() ? 0.0 : bins[apex].distance;
+  for (std::size_t b = apex; b < bins.size(); ++b) {
+    const ProfilePoint& p = bins[b];
+    if (p.top < lo) break;  // the foot of the pile, or a gap (empty bins have top < 0)
+    f.foot = p.distance;
+    if (p.top > hi) continue;
     n += 1, sx += p.distance, sy += p.top, sxx += p.distance * p.distance, sxy += p.distance * p.top;
   }
-  used += static_cast<int>(n);
+  f.points = static_cast<int>(n);
   const double den = n * sxx - sx * sx;
-  if (n < 3 || !(den > 0.0)) return false;
-  const double slope = (n * sxy - sx * sy) / den;
-  angle = std::atan(-slope) * 180.0 / kPi;
-  return true;
+  if (n < 3 || !(den > 0.0)) return f;
+  f.angle = std::atan(-(n * sxy - sx * sy) / den) * 180.0 / kPi;
+  f.ok = true;
+  return f;
+}
+
+std::int64_t grains_beyond(const std::vector<ProfilePoint>& samples, double foot, double width) {
+  std::int64_t k = 0;
+  for (const ProfilePoint& s : samples) k += s.distance > foot + width;
+  return k;
 }
 
 }  // namespace
 
-HeapMeasures heap_measures(const Grains& grains, int dimension, double source_x, double source_y) {
+std::vector<ProfilePoint> surface_profile(const Grains& grains, const std::vector<double>& distance) {
+  if (grains.empty()) return {};
+  const double width = 2.0 * max_radius(grains);
+  const double lo = *std::min_element(distance.begin(), distance.end());
+  std::vector<ProfilePoint> shifted(grains.size());
+  for (std::size_t i = 0; i < grains.size(); ++i) shifted[i] = {distance[i] - lo, grains[i].x.z() + grains[i].r};
+  std::vector<ProfilePoint> out;
+  for (ProfilePoint p : binned_profile(shifted, width))
+    if (p.top >= 0.0) out.push_back({p.distance + lo, p.top});
+  return out;
+}
+
+HeapMeasures heap_measures(const Grains& grains, int dimension, double source_x, double source_y,
+                           bool by_sides) {
   HeapMeasures h;
+  h.by_sides = by_sides;
   if (grains.empty()) {
     h.note = "no grains";
     return h;
   }
   const double width = 2.0 * max_radius(grains);
   for (const Grain& g : grains) h.height = std::max(h.height, g.x.z() + g.r);
-  const double lo = 0.2 * h.height, hi = 0.8 * h.height;
-  if (dimension == 3) {
-    std::vector<ProfilePoint> samples;
-    samples.reserve(grains.size());
-    for (const Grain& g : grains)
-      samples.push_back({std::hypot(g.x.x() - source_x, g.x.y() - source_y), g.x.z() + g.r});
-    h.valid = fit_angle(profile(samples, width), lo, hi, h.angle_deg, h.profile_points);
-    if (!h.valid) h.note = "fewer than 3 radial profile points between 20% and 80% of the height";
+  const double lo = HeapMeasures::kLowFraction * h.height, hi = HeapMeasures::kHighFraction * h.height;
+  std::vector<double> coord(grains.size());
+  for (std::size_t i = 0; i < grains.size(); ++i)
+    coord[i] = by_sides ? grains[i].x.x() - source_x
+                        : std::hypot(grains[i].x.x() - source_x, dimension == 3 ? grains[i].x.y() - source_y : 0.0);
+  h.profile = surface_profile(grains, coord);
+  if (!by_sides) {
+    std::vector<ProfilePoint> samples(grains.size());
+    for (std::size_t i = 0; i < grains.size(); ++i) samples[i] = {coord[i], grains[i].x.z() + grains[i].r};
+    const Flank f = fit_flank(binned_profile(samples, width), lo, hi);
+    h.profile_points = f.points;
+    h.grains_beyond_flank = grains_beyond(samples, f.foot, width);
+    h.valid = f.ok;
+    h.angle_deg = f.angle;
+    if (!h.valid) h.note = "fewer than 3 profile points on the flank between 20% and 80% of the height";
     return h;
   }
   std::vector<ProfilePoint> left, right;
-  for (const Grain& g : grains) {
-    const double dx = g.x.x() - source_x;
-    (dx < 0 ? left : right).push_back({std::abs(dx), g.x.z() + g.r});
-  }
-  const bool ok_left = fit_angle(profile(left, width), lo, hi, h.angle_left_deg, h.profile_points);
-  const bool ok_right = fit_angle(profile(right, width), lo, hi, h.angle_right_deg, h.profile_points);
-  h.valid = ok_left && ok_right;
+  for (std::size_t i = 0; i < grains.size(); ++i)
+    (coord[i] < 0 ? left : right).push_back({std::abs(coord[i]), grains[i].x.z() + grains[i].r});
+  const Flank fl = fit_flank(binned_profile(left, width), lo, hi);
+  const Flank fr = fit_flank(binned_profile(right, width), lo, hi);
+  h.profile_points = fl.points + fr.points;
+  h.grains_beyond_flank = grains_beyond(left, fl.foot, width) + grains_beyond(right, fr.foot, width);
+  h.angle_left_deg = fl.angle, h.angle_right_deg = fr.angle;
+  h.valid = fl.ok && fr.ok;
   if (h.valid) h.angle_deg = 0.5 * (h.angle_left_deg + h.angle_right_deg);
-  else h.note = "fewer than 3 profile points between 20% and 80% of the height on one side";
+  else h.note = "fewer than 3 profile points on a flank between 20% and 80% of the height";
   return h;
+}
+
+RadialDistribution radial_distribution(const Grains& grains, int dimension, const Container& container,
+                                       const BulkMeasures& bulk, const MetricsOptions& options) {
+  RadialDistribution out;
+  if (grains.empty()) return out;
+  double d = 0.0;
+  for (const Grain& g : grains) d += 2.0 * g.r;
+  d /= double(grains.size());
+  const int nbins = std::max(1, static_cast<int>(std::lround(options.rdf_max_d / options.rdf_bin_d)));
+  const double bin = options.rdf_bin_d * d, reach = nbins * bin;
+  out.r_over_d.resize(nbins);
+  for (int k = 0; k < nbins; ++k) out.r_over_d[k] = (k + 0.5) * options.rdf_bin_d;
+  if (!bulk.valid || bulk.grains_in_window == 0 || !(bulk.window_volume > 0.0)) return out;
+  std::vector<double> counts(nbins, 0.0);
+  // Cells a third of the reach wide, searched 3 cells out: fewer needless pairs than reach-wide cells.
+  constexpr int kCellsPerReach = 3;
+  Cells cells(grains, dimension, container, std::max(reach / kCellsPerReach, 2.0 * max_radius(grains)) * 1.0001);
+  const int search = static_cast<int>(std::ceil(reach / cells.width() - 1e-12));
+  const double reach2 = reach * reach;
+  std::int64_t centres = 0;
+  for (const std::uint32_t i : cells.order()) {
+    const Vec3& x = grains[i].x;
+    if (!in_bulk_window(bulk, x, dimension)) continue;
+    ++centres;
+    cells.for_neighbours(
+        x,
+        [&](std::uint32_t j, const Vec3& xj) {
+          if (j == i) return;
+          const double r2 = cells.separation(xj, x).squaredNorm();
+          if (r2 >= reach2) return;
+          const int k = static_cast<int>(std::sqrt(r2) / bin);
+          if (k < nbins) counts[k] += 1.0;
+        },
+        search);
+  }
+  const double density = double(centres) / bulk.window_volume;
+  out.g.resize(nbins);
+  for (int k = 0; k < nbins; ++k) {
+    const double a = k * bin, b = (k + 1) * bin;
+    const double shell = dimension == 3 ? 4.0 / 3.0 * kPi * (b * b * b - a * a * a) : kPi * (b * b - a * a);
+    out.g[k] = counts[k] / (double(centres) * density * shell);
+  }
+  out.valid = true;
+  return out;
+}
+
+namespace {
+
+SegregationIndex segregation_of(const Grains& grains, const std::vector<double>& c) {
+  SegregationIndex s;
+  std::map<int, std::pair<double, std::int64_t>> by_species;  // sum of radii, count
+  for (const Grain& g : grains) {
+    auto& e = by_species[g.species];
+    e.first += g.r, e.second += 1;
+  }
+  std::vector<char> large(grains.size(), 0), small(grains.size(), 0);
+  if (by_species.size() >= 2) {
+    int ks = by_species.begin()->first, kl = ks;
+    for (const auto& [k, e] : by_species) {
+      const double m = e.first / e.second;
+      if (m < by_species[ks].first / by_species[ks].second) ks = k;
+      if (m > by_species[kl].first / by_species[kl].second) kl = k;
+    }
+    if (by_species[ks].first / by_species[ks].second == by_species[kl].first / by_species[kl].second) {
+      s.basis = "all species have the same mean radius";
+      return s;
+    }
+    for (std::size_t i = 0; i < grains.size(); ++i)
+      large[i] = grains[i].species == kl, small[i] = grains[i].species == ks;
+    s.basis = "species " + std::to_string(kl) + " (large) vs " + std::to_string(ks) + " (small)";
+  } else {
+    if (grains.empty()) {
+      s.basis = "no grains";
+      return s;
+    }
+    std::vector<double> r(grains.size());
+    for (std::size_t i = 0; i < grains.size(); ++i) r[i] = grains[i].r;
+    const auto [mn, mx] = std::minmax_element(r.begin(), r.end());
+    if (*mx <= *mn * 1.05) {
+      s.basis = "one size (radii within 5 %)";
+      return s;
+    }
+    std::vector<double> sorted = r;
+    const std::size_t n = sorted.size();
+    std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.end());
+    double median = sorted[n / 2];
+    if (n % 2 == 0) median = 0.5 * (median + *std::max_element(sorted.begin(), sorted.begin() + n / 2));
+    for (std::size_t i = 0; i < n; ++i) large[i] = r[i] > median, small[i] = r[i] <= median;
+    s.basis = "radius above vs below the median";
+  }
+  double sl = 0, ss = 0;
+  std::int64_t nl = 0, ns = 0;
+  for (std::size_t i = 0; i < grains.size(); ++i) {
+    if (large[i]) sl += c[i], ++nl;
+    if (small[i]) ss += c[i], ++ns;
+  }
+  if (nl == 0 || ns == 0) {
+    s.basis += ": one of the two groups is empty";
+    return s;
+  }
+  s.mean_large = sl / nl, s.mean_small = ss / ns;
+  s.index = 2.0 * (s.mean_large - s.mean_small) / (s.mean_large + s.mean_small);
+  s.valid = true;
+  return s;
+}
+
+}  // namespace
+
+SegregationIndex vertical_segregation(const Grains& grains) {
+  std::vector<double> c(grains.size());
+  for (std::size_t i = 0; i < grains.size(); ++i) c[i] = grains[i].x.z();
+  return segregation_of(grains, c);
+}
+
+SegregationIndex radial_segregation(const Grains& grains, const Vec3& point, const Vec3& direction) {
+  const Vec3 u = direction.normalized();
+  std::vector<double> c(grains.size());
+  for (std::size_t i = 0; i < grains.size(); ++i) {
+    const Vec3 v = grains[i].x - point;
+    c[i] = (v - v.dot(u) * u).norm();
+  }
+  return segregation_of(grains, c);
+}
+
+std::vector<double> surface_depth(const Grains& grains, int dimension) {
+  std::vector<double> depth(grains.size(), 0.0);
+  if (grains.empty()) return depth;
+  double x0 = std::numeric_limits<double>::max(), x1 = -x0, y0 = x0, y1 = -x0;
+  for (const Grain& g : grains) {
+    x0 = std::min(x0, g.x.x()), x1 = std::max(x1, g.x.x());
+    y0 = std::min(y0, g.x.y()), y1 = std::max(y1, g.x.y());
+  }
+  const double d = 2.0 * max_radius(grains);
+  const HeightMap h = height_map(grains, dimension, x0, x1 + 1e-9 * d, y0, y1 + 1e-9 * d, d, 1 << 20);
+  const double wx = (h.ex.back() - h.ex.front()) / h.nx;
+  const double wy = dimension == 3 ? (h.ey.back() - h.ey.front()) / h.ny : 1.0;
+  for (std::size_t k = 0; k < grains.size(); ++k) {
+    const Grain& g = grains[k];
+    const int i = std::clamp(static_cast<int>((g.x.x() - x0) / wx), 0, h.nx - 1);
+    const int j = dimension == 3 ? std::clamp(static_cast<int>((g.x.y() - y0) / wy), 0, h.ny - 1) : 0;
+    depth[k] = h.top[std::size_t(j) * h.nx + i] - g.x.z();
+  }
+  return depth;
+}
+
+PackingMeasures measure_packing(const Grains& grains, int dimension, const Container& container,
+                                const MetricsOptions& options, bool heap_source, double source_x,
+                                double source_y) {
+  PackingMeasures m;
+  m.options = options;
+  m.n_grains = static_cast<std::int64_t>(grains.size());
+  m.heap_source = heap_source, m.source_x = source_x, m.source_y = source_y;
+  if (grains.empty()) {
+    m.bulk.note = "no grains";
+    return m;
+  }
+  double sum_d = 0.0, sum_z = 0.0;
+  for (const Grain& g : grains) {
+    sum_d += 2.0 * g.r, sum_z += g.x.z();
+    m.max_top = std::max(m.max_top, g.x.z() + g.r);
+  }
+  m.mean_diameter = sum_d / double(grains.size());
+  m.largest_diameter = 2.0 * max_radius(grains);
+  m.mean_centre_height = sum_z / double(grains.size());
+  m.coordination = coordination_numbers(grains, dimension, container, options.contact_tol);
+  double total = 0.0;
+  for (int z : m.coordination) total += z;
+  m.mean_coordination_all = total / double(grains.size());
+  m.bulk = bulk_measures(grains, dimension, container, options, &m.coordination);
+  m.rdf = radial_distribution(grains, dimension, container, m.bulk, options);
+  if (heap_source)
+    m.heap = heap_measures(grains, dimension, source_x, source_y,
+                           dimension == 2 || container.kind == ContainerKind::HeleShaw);
+  std::vector<double> x(grains.size());
+  for (std::size_t i = 0; i < grains.size(); ++i) x[i] = grains[i].x.x();
+  m.profile_x = surface_profile(grains, x);
+  m.segregation = vertical_segregation(grains);
+  return m;
 }
 
 }  // namespace btr

@@ -40,6 +40,10 @@ NeighbourGrid::NeighbourGrid(int dimension, const Container& c, double r_max)
       span(2.0 * c.radius, x0_, nx_, hx_);
       span(2.0 * c.radius, y0_, ny_, hy_);
       break;
+    case ContainerKind::Drum:
+      span(2.0 * c.radius, x0_, nx_, hx_);
+      if (dimension == 3) span(c.size_y, y0_, ny_, hy_);
+      break;
   }
   if (dimension == 2) { y0_ = -0.5 * h_; iy0_ = 0; ny_ = 1; hy_ = h_; }
   columns_.resize(static_cast<std::size_t>(nx_ * ny_));

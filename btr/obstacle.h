@@ -3,6 +3,8 @@
 //   sphere    a fixed grain (one periodic image of it): |x - c| = R with R = r + r_j
 //   plane     the floor or a flat wall: n.x = offset (n points into the container)
 //   cylinder  the inside of a vertical cylinder about the z axis: |x_h| = R with R = R_c - r
+//   drum      the inside of a horizontal cylinder with its axis along y through c = (0, 0, z_axis):
+//             |(x - c) without y| = R with R = R_drum - r
 #include <cstdint>
 
 #include "btr/grain.h"
@@ -10,10 +12,10 @@
 namespace btr {
 
 struct Obstacle {
-  enum class Kind : std::uint8_t { Sphere, Plane, Cylinder };
+  enum class Kind : std::uint8_t { Sphere, Plane, Cylinder, Drum };
   Kind kind = Kind::Sphere;
   std::int64_t key = 0;  // identity: grain index * 9 + image code for spheres, -1 - wall number for walls
-  Vec3 c = Vec3::Zero(); // sphere: centre (shifted to the image); plane: unit normal
+  Vec3 c = Vec3::Zero(); // sphere: centre (shifted to the image); plane: unit normal; drum: a point of the axis
   double R = 0.0;        // sphere: contact distance; plane: offset; cylinder: radius of the centre's surface
 
   bool is_floor() const { return kind == Kind::Plane && c.z() > 0.5; }
@@ -27,6 +29,7 @@ struct Obstacle {
         Vec3 h(-x.x(), -x.y(), 0.0);
         return h.normalized();
       }
+      case Kind::Drum: return Vec3(-x.x(), 0.0, c.z() - x.z()).normalized();
     }
     return Vec3::UnitZ();
   }
@@ -37,6 +40,10 @@ struct Obstacle {
       case Kind::Sphere: return (x - c).norm() - R;
       case Kind::Plane: return c.dot(x) - R;
       case Kind::Cylinder: return R - std::hypot(x.x(), x.y());
+      case Kind::Drum: {
+        const double dz = x.z() - c.z();
+        return R - std::sqrt(x.x() * x.x() + dz * dz);  // no overflow to guard against: sqrt beats hypot
+      }
     }
     return 0.0;
   }

@@ -61,6 +61,40 @@ struct RelaxSpec {
   double timestep_fraction = 0.2;   // of the Rayleigh / contact time
   std::optional<double> timestep;   // requested step; refused if above the stable one
   bool preload = false;             // start from the pre-loaded packing (coupling/preload.h)
+  // Which rule ends the relaxation (besides max_time): "kinetic-energy" (E < stop_kinetic_ratio sum m g d),
+  // "unbalanced-force" (YADE's utils.unbalancedForce() < stop_unbalanced_force) or "displacement" (the
+  // largest grain displacement over the last check window < stop_displacement * smallest diameter).
+  std::string stop_rule = "kinetic-energy";
+  double stop_unbalanced_force = 1e-3;
+  double stop_displacement = 1e-4;
+  double damping = 0.0;             // YADE's NewtonIntegrator damping (local, non-viscous), in [0, 1); 0 = off
+  double open_margin = 10.0;        // open container: grains farther than this many largest diameters
+                                    // beyond the packing's footprint are removed (and counted)
+};
+
+// A single larger grain dropped first, so it sits on the floor under the bed (Brazil nut).
+struct IntruderSpec {
+  double diameter_ratio = 1.0;  // intruder diameter / small-grain diameter (Phi)
+  double x = 0.0, y = 0.0;      // drop position (y = 0 in 2D)
+  int species = 2;              // one more than the bed's species
+};
+
+// Dynamic BTR by shaking (seed 001 section 6.6): per cycle, number the grains by height, lift the
+// pile, redeposit them in that order; noise: a uniform horizontal displacement in [-a, a] per axis.
+struct ShakingSpec {
+  std::int64_t cycles = 0;
+  double lift = 0.0;                // m
+  double noise = 0.0;               // amplitude a [m]; 0 = the deterministic model
+  std::int64_t snapshot_every = 0;  // cycles between snapshots (the initial and last are always written)
+};
+
+// Dynamic BTR in a rotating drum (seed 000 section 6): per step, rotate every grain with the drum by
+// 2 pi / steps_per_revolution about its axis, lift every grain by `lift`, redeposit them lowest first.
+struct DrumSpec {
+  std::int64_t steps_per_revolution = 100;
+  double revolutions = 1.0;
+  double lift = 0.0;                // m; default radius / 10
+  std::int64_t snapshot_every = 0;  // steps between snapshots (the initial and last are always written)
 };
 
 struct Scene {
@@ -72,6 +106,9 @@ struct Scene {
   Container container;
   SourceSpec source;
   RelaxSpec relax;
+  std::optional<IntruderSpec> intruder;
+  std::optional<ShakingSpec> shaking;
+  std::optional<DrumSpec> drum;
 };
 
 }  // namespace btr

@@ -31,7 +31,8 @@ class SceneParser {
   }
 
   Scene parse() {
-    rd_.check_keys(root_, {"scene", "grains", "container", "source", "material", "relax"});
+    rd_.check_keys(root_,
+                   {"scene", "grains", "container", "source", "material", "relax", "intruder", "shaking", "drum"});
     scene_.file = path_;
     parse_scene(required_table("scene"));
     auto material = rd_.table(root_, "material", "[material]");
@@ -46,6 +47,9 @@ class SceneParser {
     parse_container(container);
     parse_source(source, source_kind);
     finish_list_source(grains);
+    parse_intruder();
+    parse_shaking();
+    parse_drum();
     check_container_holds_grains(container);
     check_source_fits(source);
     return scene_;
@@ -78,6 +82,66 @@ class SceneParser {
         rd_.integer(s, "seed", [](std::int64_t v) { return v >= 0; }, "an integer >= 0").value_or(1));
   }
 
+  void parse_intruder() {
+    auto s = rd_.table(root_, "intruder", "[intruder]");
+    if (!s) return;
+    rd_.check_keys(*s, {"diameter_ratio", "position"});
+    const GrainsSpec& g = scene_.grains;
+    if (list_source_ || g.components.size() != 1 || g.components[0].radius.kind != RadiusSpec::Kind::Constant)
+      rd_.fail(s->line, "[intruder]: expected a bed of equal grains (one component, grains.radius = { distribution "
+                        "= \"constant\", ... }, not a list source) for the intruder's diameter ratio to refer to");
+    IntruderSpec in;
+    in.diameter_ratio = rd_.required_number(*s, "diameter_ratio", positive, "a positive diameter ratio Phi");
+    const std::string expect = dim() == 2 ? "[x] for dimension 2" : "[x, y] for dimension 3";
+    if (auto p = rd_.numbers(*s, "position", dim() - 1, any, expect)) {
+      in.x = (*p)[0];
+      in.y = dim() == 3 ? (*p)[1] : 0.0;
+    }
+    in.species = g.components[0].species + 1;
+    const double r = in.diameter_ratio * g.components[0].radius.value;
+    r_max_ = std::max(r_max_, r);
+    if (!disk_fits(in.x, in.y, 0.0, r))
+      rd_.fail(s->line, "intruder.position: expected a drop that keeps the intruder (r = " + fmt(r) +
+                            " m) inside the " + to_string(scene_.container.kind) + " container: " + allowed_text(r) +
+                            ", got [" + fmt(in.x) + (dim() == 3 ? ", " + fmt(in.y) : "") + "]");
+    scene_.intruder = in;
+  }
+
+  void parse_shaking() {
+    auto s = rd_.table(root_, "shaking", "[shaking]");
+    if (!s) return;
+    rd_.check_keys(*s, {"cycles", "lift", "noise", "snapshot_every"});
+    ShakingSpec sh;
+    auto cycles = rd_.integer(*s, "cycles", [](std::int64_t v) { return v > 0; }, "a positive number of cycles");
+    if (!cycles) rd_.missing(*s, "cycles", "a positive number of cycles");
+    sh.cycles = *cycles;
+    sh.lift = rd_.required_number(*s, "lift", positive, "a positive lift of the whole pile [m]");
+    sh.noise = rd_.number_or(*s, "noise", 0.0, non_negative, "a noise amplitude >= 0 [m]");
+    sh.snapshot_every = rd_.integer(*s, "snapshot_every", [](std::int64_t v) { return v > 0; },
+                                    "a positive number of cycles")
+                            .value_or(sh.cycles);
+    scene_.shaking = sh;
+  }
+
+  void parse_drum() {
+    auto s = rd_.table(root_, "drum", "[drum]");
+    if (!s) return;
+    if (scene_.container.kind != ContainerKind::Drum)
+      rd_.fail(s->line, "[drum]: expected container.kind = \"drum\" for a rotating drum, got \"" +
+                            std::string(to_string(scene_.container.kind)) + "\"");
+    rd_.check_keys(*s, {"steps_per_revolution", "revolutions", "lift", "snapshot_every"});
+    DrumSpec dr;
+    auto steps = rd_.integer(*s, "steps_per_revolution", [](std::int64_t v) { return v > 0; }, "a positive integer");
+    if (!steps) rd_.missing(*s, "steps_per_revolution", "a positive integer");
+    dr.steps_per_revolution = *steps;
+    dr.revolutions = rd_.required_number(*s, "revolutions", positive, "a positive number of revolutions");
+    dr.lift = rd_.number_or(*s, "lift", 0.1 * scene_.container.radius, positive,
+                            "a positive lift [m] (default: radius / 10, as in the BTR paper)");
+    dr.snapshot_every = rd_.integer(*s, "snapshot_every", [](std::int64_t v) { return v > 0; }, "a positive number of steps")
+                            .value_or(dr.steps_per_revolution);
+    scene_.drum = dr;
+  }
+
   Material parse_material(const Section& s, const Material& base) {
     rd_.check_keys(s, {"young", "poisson", "restitution", "friction", "rolling_friction"});
     Material m = base;
@@ -95,7 +159,8 @@ class SceneParser {
   void parse_relax() {
     auto s = rd_.table(root_, "relax", "[relax]");
     if (!s) return;
-    rd_.check_keys(*s, {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep", "preload"});
+    rd_.check_keys(*s, {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep", "stop_rule",
+                        "stop_unbalanced_force", "stop_displacement", "damping", "open_margin", "preload"});
     RelaxSpec& r = scene_.relax;
     r.engine = rd_.choice(*s, "engine", {"liggghts", "yade"}).value_or(r.engine);
     r.model = rd_.choice(*s, "model", {"hertz", "hooke"}).value_or(r.model);
@@ -106,6 +171,17 @@ class SceneParser {
                                         [](double v) { return v > 0.0 && v <= 1.0; }, "a fraction in (0, 1]");
     if (auto t = rd_.number(*s, "timestep", positive, "a positive time step [s]")) r.timestep = *t;
     r.preload = rd_.boolean_or(*s, "preload", r.preload);
+    r.stop_rule = rd_.choice(*s, "stop_rule", {"kinetic-energy", "unbalanced-force", "displacement"}).value_or(r.stop_rule);
+    r.stop_unbalanced_force = rd_.number_or(*s, "stop_unbalanced_force", r.stop_unbalanced_force,
+                                            [](double v) { return v > 0.0 && v < 1.0; },
+                                            "a ratio in (0, 1) (mean resultant force / mean contact force)");
+    r.stop_displacement = rd_.number_or(*s, "stop_displacement", r.stop_displacement,
+                                        [](double v) { return v > 0.0 && v < 1.0; },
+                                        "a fraction in (0, 1) of the smallest grain diameter");
+    r.damping = rd_.number_or(*s, "damping", r.damping, [](double v) { return v >= 0.0 && v < 1.0; },
+                              "a damping coefficient in [0, 1) (YADE's NewtonIntegrator damping; 0 = off)");
+    r.open_margin = rd_.number_or(*s, "open_margin", r.open_margin, positive,
+                                  "a positive number of largest grain diameters");
   }
 
   RadiusSpec parse_radius(const Section& s) {
@@ -211,9 +287,10 @@ class SceneParser {
   }
 
   void parse_container(const Section& s) {
-    rd_.check_keys(s, {"kind", "size", "gap", "radius", "height"});
+    rd_.check_keys(s, {"kind", "size", "gap", "radius", "height", "length"});
     Container& c = scene_.container;
-    const std::string kind = rd_.required_choice(s, "kind", {"open", "box", "periodic", "hele-shaw", "cylinder"});
+    const std::string kind =
+        rd_.required_choice(s, "kind", {"open", "box", "periodic", "hele-shaw", "cylinder", "drum"});
     if (dim() == 2 && (kind == "hele-shaw" || kind == "cylinder"))
       rd_.fail(Reader::line_of(*rd_.get(s, "kind")),
                "container.kind: expected \"open\", \"box\" or \"periodic\" for dimension 2 (" + kind +
@@ -222,11 +299,17 @@ class SceneParser {
              : kind == "box"      ? ContainerKind::Box
              : kind == "periodic" ? ContainerKind::Periodic
              : kind == "hele-shaw" ? ContainerKind::HeleShaw
-                                   : ContainerKind::Cylinder;
+             : kind == "cylinder"  ? ContainerKind::Cylinder
+                                   : ContainerKind::Drum;
     const std::string why = "by kind = " + quoted(kind);
-    if (kind == "open" || kind == "cylinder") rd_.forbid(s, "size", why);
+    if (kind == "open" || kind == "cylinder" || kind == "drum") rd_.forbid(s, "size", why);
     if (kind != "hele-shaw") rd_.forbid(s, "gap", why + " (only hele-shaw has a gap)");
-    if (kind != "cylinder") rd_.forbid(s, "radius", why + " (only cylinder has a radius)");
+    if (kind != "cylinder" && kind != "drum") rd_.forbid(s, "radius", why + " (only cylinder and drum have a radius)");
+    if (kind != "drum" || dim() == 2) rd_.forbid(s, "length", why + (dim() == 2 ? " in 2D" : "") + " (only a 3D drum has a length)");
+    if (kind == "drum") {
+      c.radius = rd_.required_number(s, "radius", positive, "a positive drum radius [m]");
+      if (dim() == 3) c.size_y = rd_.required_number(s, "length", positive, "a positive drum length [m] (end walls at y = +-length/2)");
+    }
     if (kind == "box" || kind == "periodic" || kind == "hele-shaw") {
       const std::size_t n = (kind == "hele-shaw" || dim() == 2) ? 1 : 2;
       const std::string expect =
@@ -336,6 +419,13 @@ class SceneParser {
     auto line = [&](const char* key) { return Reader::line_of(*rd_.get(s, key)); };
     switch (c.kind) {
       case ContainerKind::Open: return;
+      case ContainerKind::Drum:
+        if (c.radius < r_max_)
+          rd_.fail(line("radius"), "container.radius: expected at least " + r_max_text() + ", got " + fmt(c.radius));
+        if (dim() == 3 && c.size_y < d)
+          rd_.fail(line("length"), "container.length: expected at least the diameter of " + r_max_text() +
+                                       ", 2 r_max = " + fmt(d) + " m, got " + fmt(c.size_y));
+        return;
       case ContainerKind::Cylinder:
         if (c.radius < r_max_)
           rd_.fail(line("radius"), "container.radius: expected at least " + r_max_text() + ", got " + fmt(c.radius));
@@ -361,6 +451,7 @@ class SceneParser {
       case ContainerKind::Box: return {c.size_x / 2 - r, c.size_y / 2 - r};
       case ContainerKind::Periodic: return {c.size_x / 2, c.size_y / 2};
       case ContainerKind::HeleShaw: return {c.size_x / 2 - r, c.gap / 2 - r};
+      case ContainerKind::Drum: return {c.radius - r, c.size_y / 2 - r};
       default: return {inf, inf};
     }
   }

@@ -29,11 +29,12 @@
 //     material  inline table     keys of [material]; each missing key falls back to [material]
 //
 // [container]                    required
-//   kind    "open" | "box" | "periodic" | "hele-shaw" | "cylinder"
+//   kind    "open" | "box" | "periodic" | "hele-shaw" | "cylinder" | "drum"
 //           hele-shaw and cylinder are 3D only. Coordinates are centred on the z axis (container.h).
 //   size    box, periodic: [x] in 2D, [x, y] in 3D; hele-shaw: [x] (cell length). Not for open, cylinder.
 //   gap     hele-shaw only: plate distance w (>= the largest grain diameter)
-//   radius  cylinder only: inner radius (>= the largest grain radius)
+//   radius  cylinder and drum: inner radius (>= the largest grain radius)
+//   length  3D drum only: distance between its flat end walls (at y = +-length/2)
 //   height  optional wall height for the DEM stage (> 0); omitted: derived from the packing
 //   Every lateral extent must hold the largest grain (2 r_max <= size, gap, 2 radius).
 //
@@ -55,10 +56,41 @@
 // [relax]                        optional
 //   engine "liggghts" | "yade" (liggghts), model "hertz" | "hooke" (hertz), max_time > 0 [s] (0.2),
 //   stop_kinetic_ratio > 0 (1e-6), timestep_fraction in (0, 1] (0.2), timestep > 0 [s] (optional)
+//   stop_rule "kinetic-energy" | "unbalanced-force" | "displacement" (kinetic-energy): what ends the run
+//     before max_time, checked at every check of the schedule once t >= sqrt(2 r_min / g):
+//     kinetic-energy: E and its mean over the check window < stop_kinetic_ratio * sum m g d;
+//     unbalanced-force: YADE's utils.unbalancedForce() (mean over grains of |contact forces + m g| /
+//       mean over contacts of |contact force|) < stop_unbalanced_force in (0, 1) (1e-3);
+//     displacement: the largest grain displacement over the last check window < stop_displacement
+//       in (0, 1) (1e-4) times the smallest grain diameter.
+//   damping in [0, 1) (0 = off): YADE's NewtonIntegrator damping (local non-viscous); LIGGGHTS: fix
+//     viscous of equal dissipation per oscillation (coupling/README.md)
+//   open_margin > 0 (10): container "open" only: grains whose centre gets farther than open_margin largest
+//     diameters beyond the packing's footprint are removed from the run and counted (both engines)
+//
+// [intruder]                     optional (Brazil nut): one larger grain, dropped first (it rests on the
+//                                floor under the bed); needs a bed of equal grains (one component,
+//                                constant radius, no list source). It comes in addition to grains.count.
+//   diameter_ratio  > 0          intruder diameter / bed grain diameter (Phi)
+//   position        [x] (2D) or [x, y] (3D), default the origin; must keep the intruder inside
+//   The intruder's species is the bed's species + 1.
+//
+// [shaking]                      optional; used by `btr shake` (dynamic BTR, seed 001 section 6.6)
+//   cycles          integer > 0  number of shaking cycles
+//   lift            > 0 [m]      how far the whole pile is raised before each redeposition
+//   noise           >= 0 [m]     amplitude a of the random horizontal displacement per grain and cycle,
+//                                uniform in [-a, a] on each horizontal axis (default 0: deterministic)
+//   snapshot_every  integer > 0  cycles between snapshots (default: cycles)
+//
+// [drum]                         optional, container.kind = "drum"; used by `btr drum` (seed 000 section 6)
+//   steps_per_revolution  integer > 0   rotation steps per revolution (the paper: 100)
+//   revolutions           > 0           revolutions to run (steps = round(revolutions * steps_per_revolution))
+//   lift                  > 0 [m]       lift of every grain before each redeposition (default radius / 10)
+//   snapshot_every        integer > 0   steps between snapshots (default steps_per_revolution)
 //
 // Errors name the file, the line, the key and what was expected, e.g.
 //   inputs/x.toml:12: grains.count: expected a positive integer, got 0
-//   inputs/x.toml:7: unknown key 'sise' in [container]; allowed: kind, size, gap, radius, height
+//   inputs/x.toml:7: unknown key 'sise' in [container]; allowed: kind, size, gap, radius, height, length
 #include <stdexcept>
 #include <string>
 

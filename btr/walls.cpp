@@ -48,6 +48,17 @@ void container_walls(const Container& c, int dimension, double r, std::vector<Ob
       walls.push_back(o);
       break;
     }
+    case ContainerKind::Drum: {
+      // The floor z = r stays walls[0]: it touches the drum's centre surface only on its lowest line.
+      if (dimension == 3) y_walls(0.5 * c.size_y);
+      Obstacle o;
+      o.kind = Obstacle::Kind::Drum;
+      o.key = -7;
+      o.c = Vec3(0.0, 0.0, c.radius);
+      o.R = c.radius - r;
+      walls.push_back(o);
+      break;
+    }
   }
 }
 
@@ -74,6 +85,11 @@ std::string drop_misfit(const Container& c, int dimension, double x, double y, d
       if (std::hypot(x, y) > c.radius - r + slack)
         why << "(x, y) = (" << x << ", " << y << ") puts a grain of radius " << r
             << " through the cylinder of radius " << c.radius;
+      break;
+    case ContainerKind::Drum:
+      if (std::abs(x) > c.radius - r + slack)
+        why << "x = " << x << " puts a grain of radius " << r << " through the drum of radius " << c.radius << "; ";
+      if (dimension == 3) check(y, 0.5 * c.size_y, "y");
       break;
   }
   return why.str();

@@ -70,6 +70,14 @@ std::vector<DemWall> dem_walls(const Container& c, int dimension) {
       walls.push_back(w);
       break;
     }
+    case ContainerKind::Drum:
+      // Refused rather than approximated: the drum's wall is a horizontal cylinder (LIGGGHTS would need a
+      // mesh or a rotated region wall, YADE a facet cylinder), and no export of it has been written or
+      // checked against the engines yet.
+      throw std::runtime_error(
+          "container 'drum': DEM export of a rotating-drum packing is not supported (its wall is a horizontal "
+          "cylinder, which the LIGGGHTS and YADE writers do not export); relax packings built in an open, box, "
+          "periodic, hele-shaw or cylinder container");
   }
   return walls;
 }

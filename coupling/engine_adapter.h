@@ -19,7 +19,22 @@ struct RelaxPlan {
   double largest_overlap = 0.0;    // of the input packing, relative to the smaller radius
                                    // (pre-loaded: beyond the intended overlap)
   double arming_time = 0.0;        // s; 0: stop_arming_time(grains) (a pre-loaded start arms sooner)
+  std::string stop_rule = "kinetic-energy";  // scene relax.stop_rule
+  double unbalanced_threshold = 1e-3;        // unbalanced-force: stop below this ratio
+  double displacement_threshold = 0.0;       // displacement: stop below this largest displacement per window [m]
+  double damping = 0.0;                      // YADE's NewtonIntegrator damping; 0 = off
+  // Open containers: grains whose centre leaves [lo, hi] laterally are removed and counted (lo/hi[1] unused
+  // in 2D). Other containers: has_region is false.
+  bool has_region = false;
+  double region_lo[2] = {0.0, 0.0}, region_hi[2] = {0.0, 0.0};
 };
+
+// The threshold of the plan's stop rule: J (kinetic-energy), a ratio (unbalanced-force) or m (displacement).
+inline double stop_threshold(const RelaxPlan& plan) {
+  if (plan.stop_rule == "kinetic-energy") return plan.kinetic_threshold;
+  if (plan.stop_rule == "unbalanced-force") return plan.unbalanced_threshold;
+  return plan.displacement_threshold;
+}
 
 struct EngineCommand {
   std::vector<std::string> argv;            // argv[0] is looked up on PATH

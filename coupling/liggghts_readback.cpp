@@ -92,19 +92,25 @@ LiggghtsLog parse_liggghts_log(const std::string& path) {
   while (std::getline(in, line)) {
     auto w = split(line);
     if (w.empty()) { in_thermo = false; continue; }
-    // The script's thermo_style is "step time v_btr_ekin f_btr_kmean"; LIGGGHTS prints the header
+    // The script's thermo_style is "step time v_btr_ekin f_btr_kmean ..."; LIGGGHTS prints the header
     // with shortened names ("Step Time btr_ekin btr_kmea"), so the columns are taken by position.
     if (w[0] == "Step") {
-      in_thermo = w.size() == 4 && w[1] == "Time";
+      in_thermo = w.size() >= 4 && w[1] == "Time";
       n_cols = w.size();
       col_time = 1;
       col_ke = 2;
+      continue;
+    }
+    if (line.rfind("BTR-FINAL ", 0) == 0) {
+      for (std::size_t i = 0; i + 1 < w.size(); ++i)
+        if (w[i] == "unbalanced-force") to_double(w[i + 1], log.final_unbalanced_force);
       continue;
     }
     if (line.rfind("BTR-STOP ", 0) == 0) {
       log.stop_reason = w.size() > 1 ? w[1] : "";
       for (std::size_t i = 0; i + 2 < w.size(); ++i)
         if (w[i] == "t" && w[i + 1] == "=") to_double(w[i + 2], log.stop_time);
+        else if (w[i] == "value" && w[i + 1] == "=") to_double(w[i + 2], log.stop_value);
       continue;
     }
     if ((line.rfind("BTR-FAILURE", 0) == 0 || line.find("ERROR") != std::string::npos) && log.failure.empty()) {
@@ -133,7 +139,8 @@ LiggghtsLog parse_liggghts_log(const std::string& path) {
   return log;
 }
 
-RelaxResult read_liggghts_result(const std::string& dir, const Packing& original, const Scene& scene) {
+RelaxResult read_liggghts_result(const std::string& dir, const Packing& original, const Scene& scene,
+                                 const RelaxPlan& plan) {
   namespace fs = std::filesystem;
   const std::string log_path = (fs::path(dir) / kLiggghtsLog).string();
   const LiggghtsLog log = parse_liggghts_log(log_path);
@@ -144,11 +151,13 @@ RelaxResult read_liggghts_result(const std::string& dir, const Packing& original
   res.stop_reason = log.stop_reason;
   res.simulated_time = log.stop_time;
   res.kinetic_history = log.kinetic;
+  res.final_unbalanced_force = log.final_unbalanced_force;
+  res.stop_value = log.stop_value;
 
   const std::size_t n = original.grains.size();
   const std::string final_path = (fs::path(dir) / kLiggghtsFinalDump).string();
   const Dump atoms = read_dump(final_path);
-  if (atoms.rows.size() != n)
+  if (atoms.rows.size() != n && !(plan.has_region && atoms.rows.size() < n))
     fail(final_path, "lost atoms: " + std::to_string(atoms.rows.size()) + " grains of " + std::to_string(n));
   const int c_id = atoms.column("id", final_path), c_x = atoms.column("x", final_path),
             c_y = atoms.column("y", final_path), c_z = atoms.column("z", final_path);
@@ -181,6 +190,9 @@ RelaxResult read_liggghts_result(const std::string& dir, const Packing& original
       if (fn > 0.0) res.contacts.push_back({static_cast<std::int64_t>(i) + 1, 0, fn});
     }
   }
+
+  for (std::size_t i = 0; i < n; ++i)
+    if (!seen[i]) res.removed.push_back(static_cast<std::int64_t>(i) + 1);  // only with a region (checked above)
 
   const std::string contacts_path = (fs::path(dir) / kLiggghtsContactsDump).string();
   const Dump pairs = read_dump(contacts_path);

@@ -19,8 +19,12 @@ namespace btr {
 
 namespace {
 
-constexpr long kChecksOverMaxTime = 500;  // thermo samples / stop checks over max_time
-constexpr long kAveragedSamples = 100;    // samples in each averaging window
+constexpr long kChecksOverMaxTime = 500;  // at most this many stop checks over max_time
+constexpr long kAveragedSamples = 20;     // kinetic-energy samples in each check window (its mean)
+// Each check ends a `run` chunk; a check window is at least this many steps. Short chunks and frequent
+// samples (every sample is an MPI_Allreduce, a synchronisation of all ranks) made 2 MPI ranks slower
+// than 1 (coupling/README.md, "MPI").
+constexpr long kMinStepsPerCheck = 1000;
 
 std::string g17(double v) {
   char buf[40];
@@ -34,14 +38,14 @@ std::string g6(double v) {
   return buf;
 }
 
-// The simulation box: periodic where the container is, fixed at the walls, shrink-wrapped where the
-// container is open (laterally for "open", upwards for every container).
+// The simulation box: periodic where the container is, fixed at the walls and, for "open", at the removal
+// region; shrink-wrapped upwards for every container.
 struct Box {
   double lo[3], hi[3];
   std::string boundary;
 };
 
-Box make_box(const Grains& grains, int dimension, const Container& c) {
+Box make_box(const Grains& grains, int dimension, const Container& c, const RelaxPlan& plan) {
   double lo[3], hi[3], r_max = 0.0;
   for (int a = 0; a < 3; ++a) lo[a] = std::numeric_limits<double>::infinity(), hi[a] = -lo[a];
   for (const Grain& g : grains) {
@@ -53,9 +57,12 @@ Box make_box(const Grains& grains, int dimension, const Container& c) {
   auto set = [&](int a, double l, double h) { b.lo[a] = l, b.hi[a] = h; };
   switch (c.kind) {
     case ContainerKind::Open:
-      bx = "m", by = "m";
-      set(0, lo[0] - r_max, hi[0] + r_max);
-      set(1, lo[1] - r_max, hi[1] + r_max);
+      // Fixed lateral bounds at the removal region (a shrink-wrapped box would grow with every runaway
+      // grain until binning dominates each step): a grain whose centre leaves it is lost to LIGGGHTS
+      // ("thermo_modify lost ignore"), i.e. removed, and counted by the readback.
+      bx = "f", by = "f";
+      set(0, plan.region_lo[0], plan.region_hi[0]);
+      set(1, plan.region_lo[1], plan.region_hi[1]);
       break;
     case ContainerKind::Periodic:
       bx = "p", by = "p";
@@ -76,6 +83,11 @@ Box make_box(const Grains& grains, int dimension, const Container& c) {
       bx = "f", by = "f";
       set(0, -c.radius, c.radius);
       set(1, -c.radius, c.radius);
+      break;
+    case ContainerKind::Drum:  // refused by dem_walls() before any script is written
+      bx = "f", by = "f";
+      set(0, -c.radius, c.radius);
+      set(1, -0.5 * c.size_y, 0.5 * c.size_y);
       break;
   }
   if (dimension == 2) {  // one layer of spheres in y = 0: a fixed slab one largest diameter thick
@@ -163,6 +175,34 @@ std::string data_file(const Packing& packing, const Scene& scene, const Box& box
 
 }  // namespace
 
+std::vector<double> liggghts_damping_gamma(const Grains& grains, const Scene& scene, double damping) {
+  const bool hooke = scene.relax.model == "hooke";
+  const double v_char = hooke ? hooke_characteristic_velocity(grains) : 0.0;
+  std::vector<double> gamma;
+  for (const Component& c : scene.grains.components) {
+    double sum = 0.0;
+    long n = 0;
+    for (const Grain& g : grains)
+      if (g.species == c.species) sum += g.r, ++n;
+    if (n == 0) {  // a species with no grain here: any positive value, it damps nothing
+      gamma.push_back(gamma.empty() ? 1.0 : gamma.front());
+      continue;
+    }
+    const double r = sum / n, m = grain_mass(r, c.density), r_eff = 0.5 * r;
+    const double y_eff = effective_young(c.material, c.material);
+    double k;
+    if (hooke) {
+      k = hooke_stiffness(r_eff, 0.5 * m, y_eff, v_char);
+    } else {  // Hertz: F = 4/3 E* sqrt(R*) delta^(3/2), k = dF/ddelta at F = m g
+      const double delta = std::pow(3.0 * m * kGravity / (4.0 * y_eff * std::sqrt(r_eff)), 2.0 / 3.0);
+      k = 2.0 * y_eff * std::sqrt(r_eff * delta);
+    }
+    gamma.push_back(2.0 * damping / M_PI * std::sqrt(k * m));
+  }
+  if (gamma.front() <= 0.0) throw std::invalid_argument("damping: non-positive viscous coefficient");
+  return gamma;
+}
+
 std::string liggghts_wall_id(const std::string& wall_name) {
   std::string id = "btr_wall_";
   for (char c : wall_name) {
@@ -175,10 +215,12 @@ std::string liggghts_wall_id(const std::string& wall_name) {
 
 LiggghtsSchedule liggghts_schedule(const Grains& grains, const Scene& scene, const RelaxPlan& plan) {
   LiggghtsSchedule s;
-  const double total = std::ceil(plan.max_time / plan.timestep);
-  s.average_every = std::max(1L, static_cast<long>(std::ceil(total / double(kChecksOverMaxTime * kAveragedSamples))));
-  s.steps_per_check = s.average_every * kAveragedSamples;
-  s.max_checks = std::max(1L, static_cast<long>(std::ceil(total / double(s.steps_per_check))));
+  const long total = std::max(1L, static_cast<long>(std::ceil(plan.max_time / plan.timestep)));
+  long window = std::max(kMinStepsPerCheck, (total + kChecksOverMaxTime - 1) / kChecksOverMaxTime);
+  window = (window + kAveragedSamples - 1) / kAveragedSamples * kAveragedSamples;
+  s.steps_per_check = window;
+  s.average_every = window / kAveragedSamples;
+  s.max_checks = std::max(1L, (total + window - 1) / window);
   s.arming_time = plan.arming_time > 0.0 ? plan.arming_time : stop_arming_time(grains);
   s.blowup_bound = kinetic_energy_bound(grains, scene);
   return s;
@@ -189,7 +231,7 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   const int dim = scene.dimension;
   const Grains& grains = packing.grains;
   const std::vector<DemWall> walls = dem_walls(scene.container, dim);
-  const Box box = make_box(grains, dim, scene.container);
+  const Box box = make_box(grains, dim, scene.container, plan);
   const TypeTable types = make_types(scene);
   const LiggghtsSchedule sched = liggghts_schedule(grains, scene, plan);
   const int n_types = static_cast<int>(types.type_material.size());
@@ -211,15 +253,27 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
     << "# Reads " << kLiggghtsData << "; writes " << kLiggghtsLog << ", " << kLiggghtsFinalDump << ", "
     << kLiggghtsContactsDump << ".\n#\n"
     << "# Time step " << g6(plan.timestep) << " s: " << plan.timestep_rule << "\n#\n"
-    << "# Stop rule: every " << sched.steps_per_check << " steps (" << g6(sched.steps_per_check * plan.timestep)
-    << " s) the translational kinetic energy E = sum m v^2 / 2\n"
-    << "# is compared with the threshold " << g6(plan.kinetic_threshold)
-    << " J = stop_kinetic_ratio * sum m g d. The run stops when E and its mean\n"
-    << "# over the last " << sched.steps_per_check << " steps are both below it, once armed (the mean was above "
-    << "the threshold once, or t >= " << g6(sched.arming_time) << " s =\n"
-    << "# sqrt(2 r_min / g)); otherwise at max_time " << g6(plan.max_time) << " s (" << sched.max_checks
+    << "# Stop rule \"" << plan.stop_rule << "\", checked every " << sched.steps_per_check << " steps ("
+    << g6(sched.steps_per_check * plan.timestep) << " s) once t >= " << g6(sched.arming_time)
+    << " s = sqrt(2 r_min / g):\n";
+  if (plan.stop_rule == "kinetic-energy")
+    s << "# the translational kinetic energy E = sum m v^2 / 2 and its mean over the last " << sched.steps_per_check
+      << " steps are both below\n# " << g6(plan.kinetic_threshold)
+      << " J = stop_kinetic_ratio * sum m g d (also armed earlier if the mean was above it once).\n";
+  else if (plan.stop_rule == "unbalanced-force")
+    s << "# YADE's unbalanced-force ratio (mean |resultant force| over grains / mean |contact force|) is below "
+      << g6(plan.unbalanced_threshold) << ".\n";
+  else
+    s << "# the largest grain displacement over the last window is below " << g6(plan.displacement_threshold)
+      << " m = stop_displacement * smallest diameter.\n";
+  s << "# Otherwise the run stops at max_time " << g6(plan.max_time) << " s (" << sched.max_checks
     << " checks). E above " << g6(sched.blowup_bound) << " J (twice the gravitational and\n"
     << "# elastic energy the packing holds) ends the run as a failure (BTR-FAILURE).\n";
+  if (plan.has_region)
+    s << "#\n# Open floor: the box is fixed laterally at x in [" << g6(plan.region_lo[0]) << ", " << g6(plan.region_hi[0])
+      << "], y in [" << g6(plan.region_lo[1]) << ", " << g6(plan.region_hi[1])
+      << "] m (the packing's footprint + relax.open_margin largest\n# diameters); grains leaving it are lost "
+         "(removed) and counted.\n";
   if (dim == 2)
     s << "#\n# 2D packing: the disks are relaxed as spheres of the same radii whose centres stay in y = 0\n"
       << "# (fix btr_plane zeroes the y force; contact normals and torques then stay in the x-z plane).\n";
@@ -268,6 +322,15 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
     s << "fix " << liggghts_wall_id(w.name) << " all wall/gran " << models << " primitive type " << types.wall_type
       << " " << wall_geometry(w) << " store_force yes\n";
   s << "fix btr_gravity all gravity " << g17(kGravity) << " vector 0.0 0.0 -1.0\n";
+  if (plan.damping > 0) {
+    const std::vector<double> gamma = liggghts_damping_gamma(grains, scene, plan.damping);
+    s << "# Damping " << g6(plan.damping) << " (YADE's NewtonIntegrator damping): F = -gamma v with, per species,\n"
+      << "# gamma = 2 (damping / pi) sqrt(k m) (k: contact stiffness of a mean grain under its weight),\n"
+      << "# the viscous damping that dissipates the same energy per oscillation (coupling/README.md).\n"
+      << "fix btr_damping all viscous " << g17(gamma[0]);
+    for (std::size_t t = 1; t < gamma.size(); ++t) s << " scale " << t + 1 << " " << g17(gamma[t] / gamma[0]);
+    s << "\n";
+  }
   if (dim == 2) s << "fix btr_plane all setforce NULL 0.0 NULL   # after the walls and gravity\n";
   s << "fix btr_integrate all nve/sphere\n\n";
 
@@ -275,17 +338,85 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   // in these contact models (not even with rolling friction) and would keep E up forever without
   // moving; a rolling grain is caught by its translation.
   s << "compute btr_ke all ke\n"
-    << "compute btr_pairs all pair/gran/local id force_normal delta\n"
+    // Columns: id1 id2 periodic (1-3), force (4-6), normal force (7-9), overlap (10); LIGGGHTS allows one
+    // pair/gran/local compute.
+    << "compute btr_pairs all pair/gran/local id force force_normal delta\n"
     << "variable btr_ekin equal c_btr_ke\n"
     << "fix btr_kmean all ave/time " << sched.average_every << " " << kAveragedSamples << " "
     << sched.steps_per_check << " v_btr_ekin\n"
     << "variable btr_kmean equal f_btr_kmean\n"
     << "variable btr_time equal time\n"
-    << "thermo_style    custom step time v_btr_ekin f_btr_kmean\n"
-    << "thermo_modify   norm no lost error format float %.17g\n"
+    << "variable btr_atoms equal atoms\n";
+
+  // YADE's utils.unbalancedForce(): mean over grains of |resultant force| (contacts + gravity; LIGGGHTS'
+  // f after all fixes) over the mean over contacts of |contact force|. LIGGGHTS 3.8 has no per-contact
+  // magnitude (compute reduce only sums components), so grain-grain contacts enter through the per-atom
+  // pair virial: -trace(stress/atom)_i = 1/2 sum_j |x_i - x_j| F_n,ij, and sum_i of that / r_i is 2 sum_c F_n
+  // exactly for equal radii (within (r_i + r_j)^2 / (4 r_i r_j) for unequal ones; tangential forces left
+  // out). Wall contacts enter exactly (per-atom wall forces). coupling/README.md compares it with YADE's.
+  s << "\n# Unbalanced force (YADE's utils.unbalancedForce(); grain-grain normal forces from the pair virial)\n"
+    << "variable btr_fres atom sqrt(fx*fx+fy*fy+fz*fz)\n"
+    << "compute btr_fres all reduce sum v_btr_fres\n"
+    << "compute btr_virial all stress/atom pair\n"
+    << "compute btr_radius all property/atom radius\n"
+    << "variable btr_fpair atom -(c_btr_virial[1]+c_btr_virial[2]+c_btr_virial[3])/c_btr_radius\n"
+    << "compute btr_fpair all reduce sum v_btr_fpair\n"
+    << "compute btr_ncon all contact/atom\n"
+    << "compute btr_ncon_sum all reduce sum c_btr_ncon\n";
+  std::string wall_sum = "0", wall_count = "0";
+  for (const DemWall& w : walls) {
+    const std::string f = "f_force_" + liggghts_wall_id(w.name), v = "btr_fw_" + liggghts_wall_id(w.name).substr(9);
+    s << "variable " << v << " atom sqrt(" << f << "[1]^2+" << f << "[2]^2+" << f << "[3]^2)\n"
+      << "variable " << v << "_n atom v_" << v << ">0\n";
+    wall_sum += "+c_btr_fwall[" + std::to_string(2 * (&w - walls.data()) + 1) + "]";
+    wall_count += "+c_btr_fwall[" + std::to_string(2 * (&w - walls.data()) + 2) + "]";
+  }
+  s << "compute btr_fwall all reduce sum";
+  for (const DemWall& w : walls) {
+    const std::string v = "btr_fw_" + liggghts_wall_id(w.name).substr(9);
+    s << " v_" << v << " v_" << v << "_n";
+  }
+  s << "\n"
+    << "variable btr_npairs equal c_btr_ncon_sum/2\n"
+    << "variable btr_fcontact equal (c_btr_fpair/2+" << wall_sum
+    << ")/(v_btr_npairs+" << wall_count << "+1e-300)\n"
+    << "variable btr_unbalanced equal c_btr_fres/atoms/(v_btr_fcontact+1e-300)\n";
+
+  const bool by_displacement = plan.stop_rule == "displacement";
+  if (by_displacement) {
+    // The reference positions are stored every check window by btr_dref, after btr_dwin has read the
+    // displacement from the previous reference (fixes run in the order they are defined).
+    s << "\n# Displacement over each check window (unwrapped positions)\n"
+      << "compute btr_xu all property/atom xu yu zu\n"
+      << "variable btr_disp atom sqrt((c_btr_xu[1]-f_btr_dref[1])^2+(c_btr_xu[2]-f_btr_dref[2])^2+"
+         "(c_btr_xu[3]-f_btr_dref[3])^2)\n"
+      << "compute btr_dmax all reduce max v_btr_disp\n"
+      << "fix btr_dwin all ave/time " << sched.steps_per_check << " 1 " << sched.steps_per_check << " c_btr_dmax\n"
+      << "fix btr_dref all store/state " << sched.steps_per_check << " xu yu zu\n"
+      << "variable btr_dmax equal f_btr_dwin\n";
+  }
+
+  // The thermo output at the end of each chunk evaluates every compute the checks use (LIGGGHTS refuses a
+  // compute between runs that was not invoked on the last step).
+  s << "\nthermo_style    custom step time v_btr_ekin f_btr_kmean v_btr_unbalanced" << (by_displacement ? " v_btr_dmax" : "")
+    << "\n"
+    << "thermo_modify   norm no lost " << (plan.has_region ? "ignore" : "error") << " format float %.17g\n"
     << "thermo          " << sched.steps_per_check << "\n\n";
 
-  s << "variable btr_threshold equal " << g17(plan.kinetic_threshold) << "\n"
+  std::string condition, value;
+  if (plan.stop_rule == "kinetic-energy") {
+    condition = "(${btr_armed} > 0 || ${btr_time} >= ${btr_tarm}) && ${btr_kmean} < ${btr_threshold} && "
+                "${btr_ekin} < ${btr_threshold}";
+    value = "${btr_ekin}";
+  } else if (plan.stop_rule == "unbalanced-force") {
+    condition = "${btr_time} >= ${btr_tarm} && ${btr_unbalanced} < ${btr_threshold}";
+    value = "${btr_unbalanced}";
+  } else {
+    condition = "${btr_time} >= ${btr_tarm} && ${btr_dmax} < ${btr_threshold}";
+    value = "${btr_dmax}";
+  }
+  s << "variable btr_threshold equal " << g17(stop_threshold(plan)) << "\n"
+    << "variable btr_kinetic equal " << g17(plan.kinetic_threshold) << "\n"
     << "variable btr_bound equal " << g17(sched.blowup_bound) << "\n"
     << "variable btr_tarm equal " << g17(sched.arming_time) << "\n"
     << "variable btr_armed equal 0\n"
@@ -296,16 +427,16 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
     << "if \"${btr_ekin} > ${btr_bound}\" then &\n"
     << "  \"print 'BTR-FAILURE kinetic energy ${btr_ekin} J above the bound ${btr_bound} J at t = ${btr_time} s'\" "
        "quit\n"
-    << "if \"${btr_kmean} >= ${btr_threshold}\" then \"variable btr_armed equal 1\"\n"
-    << "if \"(${btr_armed} > 0 || ${btr_time} >= ${btr_tarm}) && ${btr_kmean} < ${btr_threshold} && "
-       "${btr_ekin} < ${btr_threshold}\" then \"jump SELF btr_converged\"\n"
+    << "if \"${btr_kmean} >= ${btr_kinetic}\" then \"variable btr_armed equal 1\"\n"
+    << "if \"" << condition << "\" then \"jump SELF btr_converged\"\n"
     << "next btr_check\n"
     << "jump SELF btr_loop\n"
     << "print \"BTR-STOP max-time t = ${btr_time} s\"\n"
     << "jump SELF btr_output\n"
     << "label btr_converged\n"
-    << "print \"BTR-STOP kinetic-energy t = ${btr_time} s\"\n"
-    << "label btr_output\n\n";
+    << "print \"BTR-STOP " << plan.stop_rule << " t = ${btr_time} s value = " << value << "\"\n"
+    << "label btr_output\n"
+    << "print \"BTR-FINAL unbalanced-force ${btr_unbalanced} atoms ${btr_atoms}\"\n\n";
 
   std::vector<std::string> cols{"id", "x", "y", "z", "vx", "vy", "vz"};
   for (const DemWall& w : walls)
@@ -315,7 +446,7 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   for (std::size_t i = 1; i < cols.size(); ++i) format += " %.17g";
   s << "write_dump all custom " << kLiggghtsFinalDump << names << " modify sort id format \"" << format << "\"\n"
     << "write_dump all local " << kLiggghtsContactsDump
-    << " c_btr_pairs[1] c_btr_pairs[2] c_btr_pairs[3] c_btr_pairs[4] c_btr_pairs[5] c_btr_pairs[6] c_btr_pairs[7]"
+    << " c_btr_pairs[1] c_btr_pairs[2] c_btr_pairs[3] c_btr_pairs[7] c_btr_pairs[8] c_btr_pairs[9] c_btr_pairs[10]"
     << " modify format \"%.0f %.0f %.0f %.17g %.17g %.17g %.17g\"\n";
 
   namespace fs = std::filesystem;

@@ -6,8 +6,11 @@
 //  - walls are primitive fix wall/gran planes / a z-cylinder, exactly the container's (dem_walls.h);
 //    periodic containers use periodic boundaries instead of side walls;
 //  - 2D packings (disks in the x-z plane) run as spheres held in y = 0 by "fix setforce NULL 0 NULL";
-//  - the stop rule is a loop of short runs (label / run / if ... jump SELF / next / jump), see
-//    write_liggghts_script; it prints "BTR-STOP kinetic-energy" or "BTR-STOP max-time";
+//  - the stop rule is a loop of runs of one check window each (label / run / if ... jump SELF / next /
+//    jump); it prints "BTR-STOP <rule> t = T s value = V" (rule: kinetic-energy, unbalanced-force or
+//    displacement) or "BTR-STOP max-time t = T s", then "BTR-FINAL unbalanced-force U atoms N";
+//  - open floors: the box is fixed laterally at the plan's removal region, lost atoms are ignored (and
+//    counted by the readback); damping (plan.damping > 0): fix viscous, liggghts_damping_gamma;
 //  - the final state goes to btr_final.dump (id x y z vx vy vz and the normal force of each wall)
 //    and btr_contacts.dump (pair ids, periodic flag, normal force vector, overlap), full precision.
 #include <string>
@@ -35,6 +38,11 @@ struct LiggghtsSchedule {
   double blowup_bound = 0.0;  // J
 };
 LiggghtsSchedule liggghts_schedule(const Grains& grains, const Scene& scene, const RelaxPlan& plan);
+
+// fix viscous coefficients (per species, in the scene's order) equivalent to YADE's NewtonIntegrator damping
+// `damping`: equal energy lost per oscillation of a mean grain on a contact under its weight,
+// gamma = 2 (damping / pi) sqrt(k m).
+std::vector<double> liggghts_damping_gamma(const Grains& grains, const Scene& scene, double damping);
 
 // Writes dir/btr.data and dir/in.btr; returns their paths.
 std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Scene& scene, const RelaxPlan& plan,

@@ -45,6 +45,15 @@ void check_inputs(const Packing& packing, const Scene& scene) {
     throw RelaxRefused("relax.stop_kinetic_ratio must be positive, got " + g6(r.stop_kinetic_ratio));
   if (!(r.timestep_fraction > 0.0 && r.timestep_fraction <= 1.0))
     throw RelaxRefused("relax.timestep_fraction must be in (0, 1], got " + g6(r.timestep_fraction));
+  if (r.stop_rule != "kinetic-energy" && r.stop_rule != "unbalanced-force" && r.stop_rule != "displacement")
+    throw RelaxRefused("relax.stop_rule: expected \"kinetic-energy\", \"unbalanced-force\" or \"displacement\", got \"" +
+                       r.stop_rule + "\"");
+  if (!(r.stop_unbalanced_force > 0.0 && r.stop_unbalanced_force < 1.0))
+    throw RelaxRefused("relax.stop_unbalanced_force must be in (0, 1), got " + g6(r.stop_unbalanced_force));
+  if (!(r.stop_displacement > 0.0 && r.stop_displacement < 1.0))
+    throw RelaxRefused("relax.stop_displacement must be in (0, 1) (of the smallest diameter), got " +
+                       g6(r.stop_displacement));
+  if (!(r.open_margin > 0.0)) throw RelaxRefused("relax.open_margin must be positive, got " + g6(r.open_margin));
   try {
     dem_walls(scene.container, scene.dimension);
     for (const Grain& g : packing.grains) component_index(scene, g.species);
@@ -178,6 +187,25 @@ RelaxPlan make_plan(const Packing& packing, const Scene& scene, const RelaxSetti
   }
   plan.max_time = scene.relax.max_time;
   plan.kinetic_threshold = kinetic_threshold(packing.grains, scene);
+  plan.stop_rule = scene.relax.stop_rule;
+  plan.unbalanced_threshold = scene.relax.stop_unbalanced_force;
+  double r_min = std::numeric_limits<double>::infinity(), r_max = 0.0;
+  for (const Grain& g : packing.grains) r_min = std::min(r_min, g.r), r_max = std::max(r_max, g.r);
+  plan.displacement_threshold = scene.relax.stop_displacement * 2.0 * r_min;
+  const double damping = settings.damping ? *settings.damping : scene.relax.damping;
+  if (!(damping >= 0.0 && damping < 1.0)) throw RelaxRefused("damping must be in [0, 1), got " + g6(damping));
+  plan.damping = damping;
+  if (scene.container.kind == ContainerKind::Open) {
+    // The region: the packing's footprint (grain extents) grown by open_margin largest diameters.
+    plan.has_region = true;
+    const double margin = scene.relax.open_margin * 2.0 * r_max;
+    for (int a = 0; a < 2; ++a) {
+      plan.region_lo[a] = std::numeric_limits<double>::infinity(), plan.region_hi[a] = -plan.region_lo[a];
+      for (const Grain& g : packing.grains)
+        plan.region_lo[a] = std::min(plan.region_lo[a], g.x[a] - g.r), plan.region_hi[a] = std::max(plan.region_hi[a], g.x[a] + g.r);
+      plan.region_lo[a] -= margin, plan.region_hi[a] += margin;
+    }
+  }
   return plan;
 }
 
@@ -188,7 +216,16 @@ std::vector<std::string> write_engine_inputs(const Packing& packing, const Scene
   fs::create_directories(dir, ec);
   if (ec) throw std::runtime_error(dir + ": cannot create the output folder: " + ec.message());
   std::cout << "time step " << g6(plan.timestep) << " s: " << plan.timestep_rule << "\n"
-            << "largest initial overlap: " << g6(plan.largest_overlap) << " of the smaller radius\n";
+            << "largest initial overlap: " << g6(plan.largest_overlap) << " of the smaller radius\n"
+            << "stop rule: " << plan.stop_rule << " (threshold "
+            << g6(stop_threshold(plan))
+            << (plan.stop_rule == "kinetic-energy" ? " J" : plan.stop_rule == "displacement" ? " m per check window" : "")
+            << "), or max_time " << g6(plan.max_time) << " s"
+            << (plan.damping > 0 ? "; damping " + g6(plan.damping) : std::string()) << "\n";
+  if (plan.has_region)
+    std::cout << "open floor: grains leaving x in [" << g6(plan.region_lo[0]) << ", " << g6(plan.region_hi[0]) << "]"
+              << (scene.dimension == 3 ? ", y in [" + g6(plan.region_lo[1]) + ", " + g6(plan.region_hi[1]) + "]" : "")
+              << " m are removed\n";
   return adapter.write_inputs(packing, scene, settings, plan, dir);
 }
 
@@ -227,9 +264,20 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
   Grains& out = res.relaxed.grains;
   if (out.size() != in.size())
     throw failure("lost grains: " + std::to_string(out.size()) + " of " + std::to_string(in.size()) + " came back");
+  std::vector<char> kept(in.size(), 1);
+  if (!res.removed.empty() && !plan.has_region)
+    throw failure("lost grains: " + std::to_string(res.removed.size()) + " of " + std::to_string(in.size()) +
+                  " did not come back (only an open container removes grains)");
+  for (std::int64_t id : res.removed) {
+    if (id < 1 || id > static_cast<std::int64_t>(in.size()) || !kept[id - 1])
+      throw failure("removed grain id " + std::to_string(id) + " is unknown or repeated");
+    kept[id - 1] = 0;
+  }
+  if (res.removed.size() == in.size()) throw failure("every grain left the region: nothing to relax");
   const Container& c = scene.container;
   const std::vector<DemWall> walls = dem_walls(c, scene.dimension);
   for (std::size_t i = 0; i < out.size(); ++i) {
+    if (!kept[i]) continue;
     Grain& g = out[i];
     const std::string who = "grain " + std::to_string(i + 1);
     if (!g.x.allFinite()) throw failure(who + " has a non-finite position");
@@ -250,7 +298,8 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
       throw failure("velocities of " + std::to_string(res.velocities.size()) + " grains came back, expected " +
                     std::to_string(in.size()));
     for (std::size_t i = 0; i < res.velocities.size(); ++i)
-      if (!res.velocities[i].allFinite()) throw failure("grain " + std::to_string(i + 1) + " has a non-finite velocity");
+      if (kept[i] && !res.velocities[i].allFinite())
+        throw failure("grain " + std::to_string(i + 1) + " has a non-finite velocity");
   }
   const double bound = kinetic_energy_bound(in, scene);
   for (const auto& [t, e] : res.kinetic_history)
@@ -259,19 +308,41 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
                     " J (twice the energy the packing holds): the run blew up");
   if (res.stop_reason.empty()) throw failure("the engine did not say why it stopped");
 
+  // Removed grains leave the outputs: the others keep their order, renumbered 1..N-k.
+  std::vector<std::int64_t> new_id(in.size() + 1, 0);
+  {
+    std::int64_t next = 0;
+    for (std::size_t i = 0; i < in.size(); ++i)
+      if (kept[i]) new_id[i + 1] = ++next;
+  }
+  std::vector<RelaxResult::Contact> kept_contacts;
+  for (const auto& k : res.contacts) {
+    if (!new_id[k.i] || (k.j != 0 && !new_id[k.j]))
+      throw failure("a contact names grain " + std::to_string(!new_id[k.i] ? k.i : k.j) + ", which was removed");
+    kept_contacts.push_back({new_id[k.i], k.j == 0 ? 0 : new_id[k.j], k.fn});
+  }
+  res.contacts = std::move(kept_contacts);
+
   // Outputs.
   std::sort(res.contacts.begin(), res.contacts.end(), [](const RelaxResult::Contact& a, const RelaxResult::Contact& b) {
     return a.i != b.i ? a.i < b.i : a.j < b.j;
   });
-  PointData displacement{"displacement", std::vector<double>(in.size())};
+  PointData displacement{"displacement", {}};
+  Grains kept_grains;
+  std::vector<Vec3> kept_velocities;
   for (std::size_t i = 0; i < in.size(); ++i) {
+    if (!kept[i]) continue;
     Vec3 d = out[i].x - in[i].x;
     if (c.kind == ContainerKind::Periodic) {
       d.x() = periodic_wrap(d.x(), c.size_x);
       if (scene.dimension == 3) d.y() = periodic_wrap(d.y(), c.size_y);
     }
-    displacement.values[i] = d.norm();
+    displacement.values.push_back(d.norm());
+    kept_grains.push_back(out[i]);
+    if (!res.velocities.empty()) kept_velocities.push_back(res.velocities[i]);
   }
+  out = std::move(kept_grains);
+  res.velocities = std::move(kept_velocities);
   const OverlapReport final_overlap = largest_overlap(out, scene.dimension, c);
   // The adapter's metadata (the input's, plus anything engine-specific under "relax") is kept; the
   // common fields are set here, the same for every engine.
@@ -297,8 +368,25 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
       {"initial_largest_overlap", plan.largest_overlap},
       {"final_largest_overlap", final_overlap.largest},
       {"contacts", res.contacts.size()},
+      {"stop_rule", plan.stop_rule},
+      {"stop_threshold", stop_threshold(plan)},
+      {"final_unbalanced_force", std::isfinite(res.final_unbalanced_force) ? nlohmann::json(res.final_unbalanced_force)
+                                                                           : nlohmann::json(nullptr)},
+      {"stop_value", std::isfinite(res.stop_value) ? nlohmann::json(res.stop_value) : nlohmann::json(nullptr)},
+      {"damping", plan.damping},
   });
+  if (plan.has_region) {
+    info["removed"] = {{"count", res.removed.size()},
+                       {"ids", res.removed},
+                       {"region", {{"x", {plan.region_lo[0], plan.region_hi[0]}}, {"y", {plan.region_lo[1], plan.region_hi[1]}}}},
+                       {"rule", "open floor: grains whose centre left the region (the packing's footprint grown by "
+                                "relax.open_margin largest diameters) were removed; ids are the input packing's"}};
+  }
   meta["relax"] = info;
+  // The input's structural measures describe the input, not this packing; `btr relax` measures the
+  // relaxed grains itself and stores them under the same key.
+  meta.erase("measures");
+  meta.erase("metrics");  // the key packings written before the measures had one home carried
   res.relaxed.meta = meta;
   write_packing(dir, "relaxed", res.relaxed, {displacement});
 

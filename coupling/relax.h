@@ -1,6 +1,7 @@
 #pragma once
 // DEM relaxation of a packing in LIGGGHTS or YADE (DESIGN.md section 4): write the inputs, run the
 // engine, detect failure, read the relaxed packing back.
+#include <limits>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -18,18 +19,27 @@ struct RelaxSettings {
   double max_overlap = 0.05;        // refuse packings whose largest overlap / smaller radius exceeds this
                                     // (with a pre-load: the overlap beyond the intended one)
   bool preload = false;             // pre-loaded start (preload.h); also on when the scene sets relax.preload
+  std::optional<double> damping;    // overrides the scene's relax.damping
 };
 
 // What an engine run produced.
 struct RelaxResult {
   Packing relaxed;                  // same ids; meta records engine, stop reason, timings
-  std::string stop_reason;          // "kinetic-energy", "unbalanced-force" or "max-time"
+  std::string stop_reason;          // the rule that fired: "kinetic-energy", "unbalanced-force", "displacement"
+                                    // or "max-time"
   double simulated_time = 0.0;      // s
   double wall_seconds = 0.0;
   std::vector<std::pair<double, double>> kinetic_history;  // (time, kinetic energy)
   std::vector<Vec3> velocities;     // final translational velocity of each grain, same order as relaxed.grains
   struct Contact { std::int64_t i, j; double fn; };       // j == 0 for a wall
   std::vector<Contact> contacts;
+  // Open containers: grains removed because they left the region (ids of the input packing, 1-based, in
+  // order). relaxed.grains then holds the others, in input order, renumbered 1..N-k; contacts use those ids.
+  std::vector<std::int64_t> removed;
+  // Reported by the engine at the end of the run (NaN if it did not): the unbalanced-force ratio.
+  double final_unbalanced_force = std::numeric_limits<double>::quiet_NaN();
+  // The stop rule's measure at the check that fired it (J, ratio or m; NaN for max-time).
+  double stop_value = std::numeric_limits<double>::quiet_NaN();
 };
 
 // An engine that failed (non-zero exit, lost atoms, NaN, blow-up, grains outside the container):

@@ -149,7 +149,32 @@ Material material_from_json(const Reader& rd, const json& parent, const std::str
 
 }  // namespace
 
+namespace {
+json scene_core_to_json(const Scene& s);
+}  // namespace
+
 json scene_to_json(const Scene& s) {
+  json out = scene_core_to_json(s);
+  if (s.intruder)
+    out["intruder"] = {{"diameter_ratio", s.intruder->diameter_ratio},
+                       {"x", s.intruder->x},
+                       {"y", s.intruder->y},
+                       {"species", s.intruder->species}};
+  if (s.drum)
+    out["drum"] = {{"steps_per_revolution", s.drum->steps_per_revolution},
+                   {"revolutions", s.drum->revolutions},
+                   {"lift", s.drum->lift},
+                   {"snapshot_every", s.drum->snapshot_every}};
+  if (s.shaking)
+    out["shaking"] = {{"cycles", s.shaking->cycles},
+                      {"lift", s.shaking->lift},
+                      {"noise", s.shaking->noise},
+                      {"snapshot_every", s.shaking->snapshot_every}};
+  return out;
+}
+
+namespace {
+json scene_core_to_json(const Scene& s) {
   json components = json::array();
   for (const Component& c : s.grains.components)
     components.push_back({{"species", c.species},
@@ -190,14 +215,22 @@ json scene_to_json(const Scene& s) {
         {"stop_kinetic_ratio", s.relax.stop_kinetic_ratio},
         {"timestep_fraction", s.relax.timestep_fraction},
         {"timestep", s.relax.timestep ? json(*s.relax.timestep) : json(nullptr)},
+        {"stop_rule", s.relax.stop_rule},
+        {"stop_unbalanced_force", s.relax.stop_unbalanced_force},
+        {"stop_displacement", s.relax.stop_displacement},
+        {"damping", s.relax.damping},
+        {"open_margin", s.relax.open_margin},
         {"preload", s.relax.preload}}},
   };
 }
 
+}  // namespace
+
 Scene scene_from_json(const json& j, const std::string& origin) {
   Reader rd(origin);
   if (!j.is_object()) rd.fail("", "expected the scene as a JSON object");
-  rd.check_keys(j, "", {"name", "file", "dimension", "seed", "grains", "container", "source", "relax"});
+  rd.check_keys(j, "", {"name", "file", "dimension", "seed", "grains", "container", "source", "relax", "intruder",
+                     "shaking", "drum"});
   Scene s;
   s.name = rd.string(j, "", "name");
   s.file = rd.string(j, "", "file");
@@ -231,9 +264,9 @@ Scene scene_from_json(const json& j, const std::string& origin) {
   std::string kind = rd.string(c, "container", "kind");
   bool found = false;
   for (ContainerKind k : {ContainerKind::Open, ContainerKind::Box, ContainerKind::Periodic, ContainerKind::HeleShaw,
-                          ContainerKind::Cylinder})
+                          ContainerKind::Cylinder, ContainerKind::Drum})
     if (kind == to_string(k)) s.container.kind = k, found = true;
-  if (!found) rd.fail("container.kind", "expected open, box, periodic, hele-shaw or cylinder, got '" + kind + "'");
+  if (!found) rd.fail("container.kind", "expected open, box, periodic, hele-shaw, cylinder or drum, got '" + kind + "'");
   s.container.size_x = rd.number(c, "container", "size_x");
   s.container.size_y = rd.number(c, "container", "size_y");
   s.container.gap = rd.number(c, "container", "gap");
@@ -258,7 +291,8 @@ Scene scene_from_json(const json& j, const std::string& origin) {
   s.source.file = rd.string(src, "source", "file");
 
   const json& r = rd.object(j, "", "relax",
-                            {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep", "preload"});
+                            {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep",
+                             "stop_rule", "stop_unbalanced_force", "stop_displacement", "damping", "open_margin", "preload"});
   s.relax.engine = rd.string(r, "relax", "engine");
   s.relax.model = rd.string(r, "relax", "model");
   s.relax.max_time = rd.number(r, "relax", "max_time");
@@ -271,6 +305,39 @@ Scene scene_from_json(const json& j, const std::string& origin) {
   if (r.contains("preload")) {  // absent in packings written before the option existed
     if (!r["preload"].is_boolean()) rd.fail("relax.preload", "expected true or false, got " + r["preload"].dump());
     s.relax.preload = r["preload"].get<bool>();
+  }
+  // Keys added later: packings written before them have none and take the defaults.
+  if (r.contains("stop_rule")) s.relax.stop_rule = rd.string(r, "relax", "stop_rule");
+  if (r.contains("stop_unbalanced_force")) s.relax.stop_unbalanced_force = rd.number(r, "relax", "stop_unbalanced_force");
+  if (r.contains("stop_displacement")) s.relax.stop_displacement = rd.number(r, "relax", "stop_displacement");
+  if (r.contains("damping")) s.relax.damping = rd.number(r, "relax", "damping");
+  if (r.contains("open_margin")) s.relax.open_margin = rd.number(r, "relax", "open_margin");
+  if (j.contains("intruder")) {
+    const json& in = rd.object(j, "", "intruder", {"diameter_ratio", "x", "y", "species"});
+    IntruderSpec spec;
+    spec.diameter_ratio = rd.number(in, "intruder", "diameter_ratio");
+    spec.x = rd.number(in, "intruder", "x");
+    spec.y = rd.number(in, "intruder", "y");
+    spec.species = static_cast<int>(rd.integer(in, "intruder", "species"));
+    s.intruder = spec;
+  }
+  if (j.contains("drum")) {
+    const json& dr = rd.object(j, "", "drum", {"steps_per_revolution", "revolutions", "lift", "snapshot_every"});
+    DrumSpec spec;
+    spec.steps_per_revolution = rd.integer(dr, "drum", "steps_per_revolution");
+    spec.revolutions = rd.number(dr, "drum", "revolutions");
+    spec.lift = rd.number(dr, "drum", "lift");
+    spec.snapshot_every = rd.integer(dr, "drum", "snapshot_every");
+    s.drum = spec;
+  }
+  if (j.contains("shaking")) {
+    const json& sh = rd.object(j, "", "shaking", {"cycles", "lift", "noise", "snapshot_every"});
+    ShakingSpec spec;
+    spec.cycles = rd.integer(sh, "shaking", "cycles");
+    spec.lift = rd.number(sh, "shaking", "lift");
+    spec.noise = rd.number(sh, "shaking", "noise");
+    spec.snapshot_every = rd.integer(sh, "shaking", "snapshot_every");
+    s.shaking = spec;
   }
   return s;
 }

@@ -100,27 +100,48 @@ RelaxResult yade_read_back(const std::string& dir, const Packing& original, cons
   const std::string status = st.value("status", "");
   if (status != "ok") in.fail("the script reports status \"" + status + "\": " + st.value("message", "(no message)"));
   const std::string reason = st.value("stop_reason", "");
-  if (reason != "kinetic-energy" && reason != "max-time") in.fail("unknown stop reason \"" + reason + "\" in " + yade_files::kStatus);
+  if (reason != "max-time" && reason != plan.stop_rule)
+    in.fail("stop reason \"" + reason + "\" in " + yade_files::kStatus + " is neither the scene's rule \"" + plan.stop_rule +
+            "\" nor max-time");
 
   RelaxResult result;
   result.stop_reason = reason;
   result.simulated_time = st.value("time", 0.0);
   result.wall_seconds = st.value("wall_seconds", 0.0);
 
-  // Final state: one row per grain, in id order.
-  const auto rows = in.csv(yade_files::kFinal, "id,x,y,z,vx,vy,vz");
+  // Grains removed on an open floor (left the region): packing ids, each once.
   const std::size_t n = original.grains.size();
+  std::vector<char> removed(n, 0);
+  if (st.contains("removed") && st["removed"].is_array()) {
+    for (const auto& v : st["removed"]) {
+      const std::int64_t id = v.is_number_integer() ? v.get<std::int64_t>() : 0;
+      if (id < 1 || id > static_cast<std::int64_t>(n) || removed[id - 1])
+        in.fail("removed grain " + v.dump() + " in " + yade_files::kStatus + " is unknown or repeated");
+      if (!plan.has_region) in.fail("grains were removed, but only an open floor removes grains");
+      removed[id - 1] = 1;
+      result.removed.push_back(id);
+    }
+  }
+  if (reason != "max-time" && st.contains("stop_value") && st["stop_value"].is_number())
+    result.stop_value = st["stop_value"].get<double>();
+  if (st.contains("final_unbalanced_force") && st["final_unbalanced_force"].is_number())
+    result.final_unbalanced_force = st["final_unbalanced_force"].get<double>();
+
+  // Final state: one row per grain still in the run, in id order.
+  const auto rows = in.csv(yade_files::kFinal, "id,x,y,z,vx,vy,vz");
   const std::vector<DemWall> walls = dem_walls(scene.container, scene.dimension);
-  if (rows.size() != n)
+  if (rows.size() != n - result.removed.size())
     in.fail("lost grains: " + std::string(yade_files::kFinal) + " has " + std::to_string(rows.size()) +
-            " grains, the packing " + std::to_string(n));
+            " grains, the packing " + std::to_string(n) + " (" + std::to_string(result.removed.size()) + " removed)");
   result.relaxed.grains = original.grains;
-  result.velocities.resize(n);
+  result.velocities.assign(n, Vec3::Zero());
   double max_speed = 0.0;
+  std::size_t row = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const auto& r = rows[i];
+    if (removed[i]) continue;
+    const auto& r = rows[row++];
     if (r[0] != static_cast<double>(i + 1))
-      in.fail(std::string(yade_files::kFinal) + " row " + std::to_string(i + 1) + " has id " + std::to_string(r[0]) +
+      in.fail(std::string(yade_files::kFinal) + " row " + std::to_string(row) + " has id " + std::to_string(r[0]) +
               ", expected " + std::to_string(i + 1));
     const Vec3 x(r[1], r[2], r[3]);
     const std::string why = outside(walls, scene.dimension, x);
@@ -130,7 +151,10 @@ RelaxResult yade_read_back(const std::string& dir, const Packing& original, cons
     max_speed = std::max(max_speed, result.velocities[i].norm());
   }
   // Nearest periodic image, as YADE should have seen each pair.
-  const OverlapReport overlap = largest_overlap(result.relaxed.grains, scene.dimension, scene.container);
+  Grains present;
+  for (std::size_t i = 0; i < n; ++i)
+    if (!removed[i]) present.push_back(result.relaxed.grains[i]);
+  const OverlapReport overlap = largest_overlap(present, scene.dimension, scene.container);
   if (overlap.largest > kMissedContactOverlap)
     in.fail("grains went into each other: overlap " + overlap.describe() + " (YADE missed the contact)");
 

@@ -175,14 +175,17 @@ const char* kHeader = R"(#
 # "hooke" is YADE's linear law (Ip2_ViscElMat_ViscElMat_ViscElPhys, Law2_ScGeom_ViscElPhys_Basic: linear
 # spring and Coulomb slider as in Cundall-Strack, plus a normal dashpot), with kn equal to LIGGGHTS' model
 # hooke k_n for like grains and ks = kn. Rolling friction only if the scene sets it (Hertz-Mindlin moment law).
-# Damping: viscous only, from the pair's restitution coefficient (the Ip2 functors' en MatchMaker); no
-# NewtonIntegrator damping, as in LIGGGHTS, so the dynamics stays physical.
+# Damping: viscous, from the pair's restitution coefficient (the Ip2 functors' en MatchMaker); NewtonIntegrator
+# damping only if DAMPING > 0 (scene relax.damping or `btr relax --damping`; off by default).
 # Pairs: unlike species take the mean restitution and friction, a grain-wall contact the grain's values.
 # Walls: the first species' material, Young's modulus raised because YADE sees a wall as a sphere of the
 # grain's radius; planes are infinite (utils.wall); a periodic floor is a thin box wider than the cell.
-# Stop rule (the LIGGGHTS script's): every STEPS_PER_CHECK steps the translational kinetic energy E and its
-# mean over the last STEPS_PER_CHECK steps are compared with KINETIC_THRESHOLD; the run stops when both are
-# below it, once armed (the mean was above it once, or t >= ARMING_TIME), else after MAX_CHECKS checks.
+# Stop rules (the LIGGGHTS script's), checked every STEPS_PER_CHECK steps: STOP_RULE "kinetic-energy" (the
+# translational kinetic energy E and its mean over the last STEPS_PER_CHECK steps below KINETIC_THRESHOLD,
+# once armed: the mean was above it once, or t >= ARMING_TIME), "unbalanced-force" (utils.unbalancedForce()
+# below UNBALANCED_THRESHOLD) or "displacement" (largest displacement since the last check below
+# DISPLACEMENT_THRESHOLD), each from t >= ARMING_TIME; else after MAX_CHECKS checks (max-time).
+# Open floor (REGION): grains whose centre left the region are erased at each check and listed as removed.
 # The rule runs inside YADE's loop (a PyRunner every AVERAGE_EVERY steps), which pauses YADE when it decides.
 # A run fails on NaN, E above KINETIC_BOUND (checked at every sample), lost bodies, or a grain below the floor.
 # Periodic cells: YADE gives a pair one periodic image, chosen by the collider, and only while each grain's
@@ -249,6 +252,16 @@ std::string yade_script(const Packing& packing, const Scene& scene, const RelaxP
       << "AVERAGE_EVERY = " << sched.average_every << "  # steps between samples of the mean\n"
       << "MAX_CHECKS = " << sched.max_checks << "  # max_time " << num(plan.max_time) << " s\n"
       << "ARMING_TIME = " << num(sched.arming_time) << "  # s, sqrt(2 r_min / g)\n"
+      << "STOP_RULE = " << py_string(plan.stop_rule) << "\n"
+      << "UNBALANCED_THRESHOLD = " << num(plan.unbalanced_threshold) << "  # utils.unbalancedForce()\n"
+      << "DISPLACEMENT_THRESHOLD = " << num(plan.displacement_threshold)
+      << "  # m per check window, stop_displacement * smallest diameter\n"
+      << "DAMPING = " << num(plan.damping) << "  # NewtonIntegrator damping (0 = off)\n"
+      << "REGION = "
+      << (plan.has_region ? "(" + num(plan.region_lo[0]) + ", " + num(plan.region_hi[0]) + ", " + num(plan.region_lo[1]) +
+                                ", " + num(plan.region_hi[1]) + ")  # open floor: x0, x1, y0, y1 [m]; grains leaving it are removed"
+                          : std::string("None  # no removal region (not an open floor)"))
+      << "\n"
       << "VERLET_DIST = " << num(verlet) << "  # m, collider's bounding-box margin: "
       << (verlet < 0.5 * st.r_min ? "below half the period with the largest grain" : "0.5 r_min") << "\n\n\n"
       << "def scene():\n";

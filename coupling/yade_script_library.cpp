@@ -78,6 +78,7 @@ _grains = []         # [(packing id, body id)] in packing order
 _walls = []          # body ids of walls, facets and the periodic floor
 _cell = None         # (Lx, Ly, Lz) when periodic
 _rolling = None      # dict(krot=, eta=) for the Hertz-Mindlin moment law; None = no rolling term
+_removed = []        # packing ids of grains removed because they left REGION (open floor), in removal order
 _history = []        # [(time, translational kinetic energy)] at t = 0 and at every check
 _loop_seconds = 0.0  # wall time of the time-stepping loop alone
 
@@ -204,10 +205,10 @@ def build_engines():
         collider,
         InteractionLoop([Ig2_Sphere_Sphere_ScGeom(), Ig2_Wall_Sphere_ScGeom(), Ig2_Facet_Sphere_ScGeom(),
                          Ig2_Box_Sphere_ScGeom()], [ip2], [law]),
-        # No numerical (non-viscous) damping: all dissipation is in the contact dashpots set by the
-        # restitution coefficient and in friction, as in LIGGGHTS, so the dynamics stays physical.
-        # kinSplit + O.trackEnergy give the translational kinetic energy of the stop rule.
-        NewtonIntegrator(gravity=(0.0, 0.0, -GRAVITY), damping=0.0, kinSplit=True, label="newton"),
+        # DAMPING is YADE's local non-viscous damping, off (0) unless the scene or `btr relax --damping` asks
+        # for it: then, besides the contact dashpots and friction, each force component is reduced by
+        # DAMPING |F| against the velocity. kinSplit + O.trackEnergy give the translational kinetic energy.
+        NewtonIntegrator(gravity=(0.0, 0.0, -GRAVITY), damping=DAMPING, kinSplit=True, label="newton"),
     ]
     O.trackEnergy = True
 
@@ -230,6 +231,8 @@ def write_outputs():
     lines = ["id,x,y,z,vx,vy,vz"]
     for gid, bid in _grains:
         b = O.bodies[bid]
+        if b is None:  # removed (open floor)
+            continue
         p, v = b.state.pos, b.state.vel
         x, y = p[0], p[1]
         if _cell is not None:
@@ -240,6 +243,7 @@ def write_outputs():
     write_atomically(FINAL_FILE, "\n".join(lines) + "\n")
     packing_id = {bid: gid for gid, bid in _grains}
     lines = ["i,j,fn,overlap"]
+    # (removed grains are no longer bodies: their ids never appear here)
     for i in O.interactions:
         if not i.isReal or i.geom.penetrationDepth <= 0.0:
             continue
@@ -260,16 +264,54 @@ def write_status(status, reason, message, wall):
         "loop_steps_per_second": steps / _loop_seconds if _loop_seconds > 0 else 0.0,
         "grains": len(_grains), "bodies": len(O.bodies), "threads": O.numThreads,
         "yade_version": getattr(yade.config, "version", "unknown"), "model": MODEL,
+        "stop_value": _rule.value if _rule is not None else None,
+        "final_unbalanced_force": _final_unbalanced,
+        "removed": _removed,
     }, indent=1) + "\n")
 
 
+def unbalanced_force():
+    """YADE's utils.unbalancedForce(): mean over grains of |contact forces + m g| / mean over contacts of
+    |normal + shear force|; a large number while no contact carries force yet."""
+    try:
+        return utils.unbalancedForce()
+    except (ZeroDivisionError, ArithmeticError):
+        return float("inf")
+
+
+def remove_escaped():
+    """Open floor: erases every grain whose centre left REGION (x0, x1, y0, y1); returns how many."""
+    if REGION is None:
+        return 0
+    x0, x1, y0, y1 = REGION
+    gone = 0
+    for gid, bid in _grains:
+        b = O.bodies[bid]
+        if b is None:
+            continue
+        p = b.state.pos
+        if p[0] < x0 or p[0] > x1 or (DIMENSION == 3 and (p[1] < y0 or p[1] > y1)):
+            O.bodies.erase(bid)
+            _removed.append(gid)
+            gone += 1
+    return gone
+
+
+def grain_positions():
+    return [O.bodies[bid].state.pos if O.bodies[bid] is not None else None for _, bid in _grains]
+
+
 class StopRule:
-    """The stop rule of the LIGGGHTS script, step for step, run inside YADE's loop by a PyRunner every
+    """The stop rules of the LIGGGHTS script, step for step, run inside YADE's loop by a PyRunner every
     AVERAGE_EVERY steps (so YADE runs whole chunks of steps without returning to Python): the translational
-    kinetic energy E is sampled after every AVERAGE_EVERY-th step; every STEPS_PER_CHECK steps E and the mean
-    of the last STEPS_PER_CHECK / AVERAGE_EVERY samples are compared with KINETIC_THRESHOLD. The run stops
-    when both are below it, once armed (the mean was above the threshold once, or t >= ARMING_TIME);
-    otherwise after MAX_CHECKS checks (max-time). A sample above KINETIC_BOUND is a blow-up.
+    kinetic energy E is sampled after every AVERAGE_EVERY-th step; every STEPS_PER_CHECK steps comes a check.
+    STOP_RULE "kinetic-energy": E and the mean of the last STEPS_PER_CHECK / AVERAGE_EVERY samples are both
+    below KINETIC_THRESHOLD, once armed (the mean was above it once, or t >= ARMING_TIME);
+    "unbalanced-force": utils.unbalancedForce() < UNBALANCED_THRESHOLD, once t >= ARMING_TIME;
+    "displacement": the largest grain displacement since the previous check < DISPLACEMENT_THRESHOLD [m],
+    once t >= ARMING_TIME. Otherwise the run ends after MAX_CHECKS checks (max-time). A sample above
+    KINETIC_BOUND is a blow-up. With an open floor (REGION), grains whose centre left the region are erased
+    at every check (and counted).
     The PyRunner runs during a step, after NewtonIntegrator: that step ends at O.iter + 1, O.time + O.dt.
     It never raises (an exception would stop YADE with a bare "PyRunner error"): it records the reason or
     the failure and pauses the run."""
@@ -282,8 +324,10 @@ class StopRule:
         self.armed = False
         self.bodies = len(O.bodies)
         self.reason = None
+        self.value = None
         self.failure = None
         self.next_report = time.time() + 10.0
+        self.reference = grain_positions() if STOP_RULE == "displacement" else None
 
     def sample(self):
         try:
@@ -292,6 +336,15 @@ class StopRule:
             self.failure = exc if isinstance(exc, RunFailure) else RunFailure(
                 "%s: %s\n%s" % (type(exc).__name__, exc, traceback.format_exc()))
             O.pause()
+
+    def _largest_displacement(self):
+        now = grain_positions()
+        largest = 0.0
+        for a, b in zip(self.reference, now):
+            if a is not None and b is not None:
+                largest = max(largest, (b - a).norm())
+        self.reference = now
+        return largest
 
     def _sample(self):
         e = translational_kinetic_energy()
@@ -314,12 +367,28 @@ class StopRule:
         _history.append((t, e))
         if not math.isfinite(mean):
             raise RunFailure("mean kinetic energy is %r at t = %.6g s (step %d)" % (mean, t, step))
-        if len(O.bodies) != self.bodies:
-            raise RunFailure("bodies were lost: %d left of %d" % (len(O.bodies), self.bodies))
+        removed = remove_escaped()
+        if removed:
+            log("t = %.6g s: %d grain(s) left the open floor's region and were removed (%d in all)" % (
+                t, removed, len(_removed)))
+        # len(O.bodies) keeps counting erased slots: count the bodies themselves once grains were removed.
+        present = len(O.bodies) if not _removed else sum(1 for b in O.bodies if b is not None)
+        if present != self.bodies - len(_removed):
+            raise RunFailure("bodies were lost: %d left of %d (%d removed)" % (present, self.bodies, len(_removed)))
         if mean >= KINETIC_THRESHOLD:
             self.armed = True
-        if (self.armed or t >= ARMING_TIME) and mean < KINETIC_THRESHOLD and e < KINETIC_THRESHOLD:
-            self.reason = "kinetic-energy"
+        ready = self.armed or t >= ARMING_TIME if STOP_RULE == "kinetic-energy" else t >= ARMING_TIME
+        if STOP_RULE == "kinetic-energy":
+            self.value = e
+            met = mean < KINETIC_THRESHOLD and e < KINETIC_THRESHOLD
+        elif STOP_RULE == "unbalanced-force":
+            self.value = unbalanced_force()
+            met = self.value < UNBALANCED_THRESHOLD
+        else:
+            self.value = self._largest_displacement()
+            met = self.value < DISPLACEMENT_THRESHOLD
+        if ready and met:
+            self.reason = STOP_RULE
         elif self.checks >= MAX_CHECKS:
             self.reason = "max-time"
         if self.reason is not None:
@@ -327,11 +396,12 @@ class StopRule:
             return
         if time.time() >= self.next_report:
             self.next_report = time.time() + 10.0
-            log("t = %.6g s, step %d, kinetic energy %.6g J (%.3g x threshold)" % (
-                t, step, e, e / KINETIC_THRESHOLD))
+            log("t = %.6g s, step %d, kinetic energy %.6g J (%.3g x threshold), %s %.6g" % (
+                t, step, e, e / KINETIC_THRESHOLD, STOP_RULE, self.value))
 
 
 _rule = None
+_final_unbalanced = None
 
 
 def relax():
@@ -343,8 +413,12 @@ def relax():
     log("YADE %s, %d threads, model %s, %d grains, %d wall bodies" % (
         getattr(yade.config, "version", "?"), O.numThreads, MODEL, len(_grains), len(_walls)))
     log("time step %.6g s: %s (YADE's P-wave estimate: %.6g s)" % (TIMESTEP, TIMESTEP_RULE, utils.PWaveTimeStep()))
-    log("stop: E and its mean < %.6g J every %d steps, armed at t >= %.6g s; at most %d checks; blow-up above %.6g J"
-        % (KINETIC_THRESHOLD, STEPS_PER_CHECK, ARMING_TIME, MAX_CHECKS, KINETIC_BOUND))
+    log("stop rule %s (kinetic %.6g J, unbalanced force %.6g, displacement %.6g m) every %d steps, from t >= %.6g s; "
+        "at most %d checks; blow-up above %.6g J; damping %.6g" % (
+            STOP_RULE, KINETIC_THRESHOLD, UNBALANCED_THRESHOLD, DISPLACEMENT_THRESHOLD, STEPS_PER_CHECK, ARMING_TIME,
+            MAX_CHECKS, KINETIC_BOUND, DAMPING))
+    if REGION is not None:
+        log("open floor: grains leaving x in [%.6g, %.6g], y in [%.6g, %.6g] m are removed" % REGION)
     _history.append((0.0, sum(0.5 * O.bodies[b].state.mass * O.bodies[b].state.vel.squaredNorm() for _, b in _grains)))
     _rule = StopRule()
     # PyRunner commands run in __main__, which is not this script's namespace under the `yade` launcher.
@@ -365,15 +439,23 @@ def relax():
 
 
 def main():
+    global _final_unbalanced
     t0 = time.time()
     try:
         scene()
         reason = relax()
+        remove_escaped()
+        _final_unbalanced = unbalanced_force()
+        if not math.isfinite(_final_unbalanced):
+            _final_unbalanced = None
         for gid, bid in _grains:
+            if O.bodies[bid] is None:
+                continue
             if O.bodies[bid].state.pos[2] < 0.0:
                 raise RunFailure("grain %d fell through the floor (z = %.6g m)" % (gid, O.bodies[bid].state.pos[2]))
         write_outputs()
         wall = time.time() - t0
+        log("unbalanced force at the end: %s; %d grain(s) removed" % (_final_unbalanced, len(_removed)))
         log("stopped by %s at t = %.6g s after %d steps, %.3g s wall time, %.3g s of them stepping (%.4g steps/s)" % (
             reason, O.time, O.iter, wall, _loop_seconds, O.iter / _loop_seconds if _loop_seconds > 0 else 0.0))
         write_status("ok", reason, "", wall)

@@ -6,6 +6,8 @@
   pipeline [SCENE] [-o OUTDIR]            BTR -> DEM relaxation -> comparison -> report (default inputs/bed3d.toml)
   error-vs-runtime SCENE [-o OUTDIR]      error of BTR, BTR + relaxation and DEM pours against a pour reference
   stability [-o OUTDIR] [--tiny]          relaxation stability sweep in each engine
+  brazil-nut [-o OUTDIR] [--tiny]         intruder rise under dynamic BTR shaking, Phi sweep, 3D and 2D
+  drum [-o OUTDIR] [--revolutions N]      segregation and dynamic angle in a rotating drum (2D, 3D)
 
 The `btr` program is $BTR_BINARY, else build/app/btr. Exit status: 0 done, 2 bad input, 3 a step failed
 (its error is printed and recorded in OUTDIR/run.json; what earlier steps wrote is kept)."""
@@ -17,7 +19,6 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from btrdem import metrics  # noqa: E402
 from btrdem.io import InputError  # noqa: E402
 from btrdem.runner import REPO, StepFailed  # noqa: E402
 
@@ -26,16 +27,6 @@ DEFAULT_SCENE = REPO / "inputs" / "bed3d.toml"
 
 def progress(msg: str):
     print(msg, flush=True)
-
-
-def window_arg(text: str) -> metrics.Window:
-    try:
-        parts = [float(x) for x in text.split(",")]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected FLOOR,WALL,SURFACE in mean diameters, got {text!r}") from None
-    if len(parts) != 3 or min(parts) < 0:
-        raise argparse.ArgumentTypeError(f"expected three non-negative numbers FLOOR,WALL,SURFACE, got {text!r}")
-    return metrics.Window(*parts)
 
 
 def floats(text: str) -> list:
@@ -60,15 +51,16 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="btr_workflow.py", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="command", required=True)
-    win_help = "bulk window margins in mean diameters FLOOR,WALL,SURFACE (default 2,2,2)"
+    margin_help = "bulk window margin from floor, walls and free surface, in largest diameters (default: btr measure's)"
 
     c = sub.add_parser("compare", help="compare two packings of the same grains")
     c.add_argument("pre")
     c.add_argument("post")
     c.add_argument("-o", "--out", required=True)
     c.add_argument("--scene", help="scene TOML (default: the scene in PRE's JSON)")
-    c.add_argument("--window", type=window_arg, default=metrics.Window(), help=win_help)
-    c.add_argument("--contact-tolerance", type=float, default=metrics.CONTACT_TOLERANCE)
+    c.add_argument("--margin", type=float, help=margin_help)
+    c.add_argument("--contact-tolerance", type=float,
+                   help="contact: gap < tolerance x smaller radius (default: btr measure's)")
 
     p = sub.add_parser("pour", help="reference LIGGGHTS pour of a BTR packing's grains")
     p.add_argument("packing")
@@ -95,7 +87,7 @@ def main(argv=None) -> int:
     e.add_argument("--relax-times", type=floats, help="relaxation caps [s], e.g. 0.01,0.05,0.2")
     e.add_argument("--pours", type=pour_variants, help="shorter pours PACE:STOP,... e.g. 0.25:1e-3,0.5:1e-4,1:1e-6")
     e.add_argument("--np", type=int, default=1)
-    e.add_argument("--window", type=window_arg, default=metrics.Window(), help=win_help)
+    e.add_argument("--margin", type=float, help=margin_help)
 
     s = sub.add_parser("stability", help="relaxation stability sweep")
     s.add_argument("-o", "--out", help="output folder (default out/stability)")
@@ -105,6 +97,17 @@ def main(argv=None) -> int:
     s.add_argument("--max-steps", type=int)
     s.add_argument("--np", type=int, default=1)
 
+    bn = sub.add_parser("brazil-nut", help="Brazil-nut effect under dynamic BTR shaking (btr shake)")
+    bn.add_argument("-o", "--out", help="output folder (default out/brazil_nut)")
+    bn.add_argument("--dims", default="3,2", help="dimensions, comma-separated (default 3,2)")
+    bn.add_argument("--tiny", action="store_true", help="two Phi and two noise values, a few hundred grains, 6 cycles")
+    bn.add_argument("--seed", type=int, default=1)
+
+    dr = sub.add_parser("drum", help="rotating drum under dynamic BTR (btr drum): segregation, dynamic angle")
+    dr.add_argument("-o", "--out", help="output folder (default out/drum)")
+    dr.add_argument("--revolutions", type=float, default=3.0)
+    dr.add_argument("--tiny", action="store_true", help="300 grains, 20 steps per revolution, one revolution")
+
     args = ap.parse_args(argv)
     try:
         if args.command == "compare":
@@ -112,9 +115,9 @@ def main(argv=None) -> int:
             from btrdem.runner import RunRecord
             rec = RunRecord(args.out, "compare", inputs=[args.scene] if args.scene else [], progress=progress,
                             settings={"pre": str(Path(args.pre).resolve()), "post": str(Path(args.post).resolve()),
-                                      "window": args.window.as_dict(), "contact_tolerance": args.contact_tolerance})
+                                      "margin": args.margin, "contact_tolerance": args.contact_tolerance})
             with rec.step("compare"):
-                res = compare(args.pre, args.post, args.out, args.scene, args.window, args.contact_tolerance,
+                res = compare(args.pre, args.post, args.out, args.scene, args.margin, args.contact_tolerance,
                               progress)
             rec.finish()
             st = res["displacement_d"]
@@ -138,7 +141,7 @@ def main(argv=None) -> int:
         elif args.command == "error-vs-runtime":
             from btrdem.error_runtime import run_error_vs_runtime
             run_error_vs_runtime(args.scene, args.out, args.engine, args.ref_seeds, args.count, args.relax_times,
-                                 args.pours, args.np, args.window, progress)
+                                 args.pours, args.np, args.margin, progress)
         elif args.command == "stability":
             from btrdem.stability import run_stability
             engines = [x for x in args.engines.split(",") if x]
@@ -146,6 +149,17 @@ def main(argv=None) -> int:
             if bad:
                 raise InputError(f"--engines: expected liggghts and/or yade, got {', '.join(bad)}")
             run_stability(args.out, engines, args.scene, args.tiny, args.max_steps, args.np, progress)
+        elif args.command == "brazil-nut":
+            from btrdem.brazil_nut import run_brazil_nut
+            dims = [x for x in args.dims.split(",") if x]
+            if not dims or any(x not in ("2", "3") for x in dims):
+                raise InputError(f"--dims: expected 3 and/or 2, comma-separated, got {args.dims!r}")
+            run_brazil_nut(args.out, tuple(int(x) for x in dims), args.tiny, args.seed, progress)
+        elif args.command == "drum":
+            from btrdem.drum import run_drum
+            if not args.revolutions > 0:
+                raise InputError(f"--revolutions: expected a positive number, got {args.revolutions}")
+            run_drum(args.out, args.revolutions, args.tiny, progress)
     except InputError as e:
         print(f"btr_workflow.py {args.command}: {e}", file=sys.stderr)
         return 2

@@ -157,7 +157,8 @@ TEST(Drops, NumberFractionsAreUsedAsGiven) {
 // Checks every drop lies where its grain fits and that the drops reach the edges of that area.
 TEST(Drops, RainStaysInsideTheFootprint) {
   const RadiusSpec r = ranged(RadiusSpec::Kind::Uniform, 0.5e-3, 1.0e-3);
-  for (auto kind : {ContainerKind::Box, ContainerKind::Periodic, ContainerKind::HeleShaw, ContainerKind::Cylinder}) {
+  for (auto kind : {ContainerKind::Box, ContainerKind::Periodic, ContainerKind::HeleShaw, ContainerKind::Cylinder,
+                    ContainerKind::Drum}) {
     for (int dim : {2, 3}) {
       if (dim == 2 && (kind == ContainerKind::HeleShaw || kind == ContainerKind::Cylinder)) continue;
       SCOPED_TRACE(std::string(to_string(kind)) + " " + std::to_string(dim) + "D");
@@ -193,11 +194,17 @@ TEST(Drops, RainStaysInsideTheFootprint) {
             inner += rho < (c.radius - d.r) / 2;  // a quarter of the disk's area
             break;
           }
+          case ContainerKind::Drum:  // across the drum's width; in 3D clear of its end walls (length size_y)
+            ASSERT_LE(std::abs(d.x), c.radius - d.r);
+            if (dim == 3) {
+              ASSERT_LE(std::abs(d.y), c.size_y / 2 - d.r);
+            }
+            break;
           case ContainerKind::Open: break;
         }
         x_lo = std::min(x_lo, d.x), x_hi = std::max(x_hi, d.x);
       }
-      const double reach = kind == ContainerKind::Cylinder ? c.radius - 1e-3
+      const double reach = kind == ContainerKind::Cylinder || kind == ContainerKind::Drum ? c.radius - 1e-3
                            : kind == ContainerKind::Periodic ? c.size_x / 2
                                                              : c.size_x / 2 - 1e-3;
       EXPECT_LT(x_lo, -0.9 * reach);

@@ -69,6 +69,10 @@ Container container_for(const Case& c) {
       k.gap = 3 * kRmax;  // 1.5 largest diameters: grains pass each other only partly
       break;
     case ContainerKind::Cylinder: k.radius = 0.6 * L; break;
+    case ContainerKind::Drum:  // filled to about a third, so that the grains pile up against the wall
+      k.radius = c.dim == 2 ? 2 * L : L;
+      k.size_y = c.dim == 2 ? 0 : 0.75 * L;
+      break;
   }
   return k;
 }
@@ -105,6 +109,10 @@ std::vector<Drop> drops_for(const Case& c, const Container& k, std::uint64_t see
         q.y = rho * std::sin(a);
         break;
       }
+      case ContainerKind::Drum:
+        q.x = (u() - 0.5) * 2 * (k.radius - q.r);
+        q.y = c.dim == 3 ? (u() - 0.5) * (k.size_y - 2 * q.r) : 0.0;
+        break;
     }
   }
   return d;
@@ -197,6 +205,7 @@ TEST_P(Invariants, PackingIsValidAndBreakingItIsCaught) {
       case ContainerKind::Box:
       case ContainerKind::HeleShaw: q.x.x() = 0.5 * k.size_x - 0.5 * q.r; break;
       case ContainerKind::Cylinder: q.x.x() = k.radius - 0.5 * q.r, q.x.y() = 0; break;
+      case ContainerKind::Drum: q.x.x() = k.radius - 0.5 * q.r, q.x.z() = k.radius; break;  // through the wall
     }
     const CheckReport br = check_packing(b, c.dim, k);
     EXPECT_GE(br.outside, 1) << describe(br);
@@ -211,6 +220,8 @@ std::vector<Case> all_cases() {
     for (ContainerKind kind : {ContainerKind::Open, ContainerKind::Box, ContainerKind::Periodic,
                                ContainerKind::HeleShaw, ContainerKind::Cylinder})
       v.push_back({3, kind, s, 2000});
+    v.push_back({2, ContainerKind::Drum, s, 350});
+    v.push_back({3, ContainerKind::Drum, s, 400});
   }
   return v;
 }

@@ -289,11 +289,153 @@ TEST(HeapMeasures, ConicalHeap) {
   EXPECT_NEAR(m.angle_deg, theta, 1e-9);
 }
 
+// A Hele-Shaw heap is a 2D pile between the plates: each side is fitted on its own, as in 2D.
+TEST(HeapMeasures, HeleShawHeapIsFittedSideBySide) {
+  const double r = 1e-3, H0 = 0.05, left = 24.0, right = 34.0;
+  Grains g;
+  for (int k = -100; k < 100; ++k) {
+    const double x = (k + 0.5) * 2 * r, t = std::tan((x < 0 ? left : right) * kPi / 180);
+    const double h = std::max(2 * r, H0 - t * std::abs(x));
+    column(g, x, (k % 2 ? 0.5 : -0.5) * r, h, r);  // centres staggered across a 3 r gap
+  }
+  Container cell;
+  cell.kind = ContainerKind::HeleShaw;
+  cell.size_x = 0.4;
+  cell.gap = 3 * r;
+  const PackingMeasures m = measure_packing(g, 3, cell, {}, true, 0.0, 0.0);
+  ASSERT_TRUE(m.heap.valid) << m.heap.note;
+  EXPECT_TRUE(m.heap.by_sides);
+  EXPECT_NEAR(m.heap.angle_left_deg, left, 1e-9);
+  EXPECT_NEAR(m.heap.angle_right_deg, right, 1e-9);
+}
+
 TEST(HeapMeasures, FlatBedHasNoSlope) {
   Grains g;
   for (int i = -30; i < 30; ++i) column(g, i * 2e-3, 0.0, 0.02, 1e-3);
   const HeapMeasures m = heap_measures(g, 2, 0.0, 0.0);
   EXPECT_FALSE(m.valid);
+}
+
+// Stray grains that rolled far from the heap: stacks `layers` grains high, spread over distances
+// [from, to] from the axis (on a line in 2D, on a ring in 3D), far apart from each other.
+void strays(Grains& g, int dimension, double from, double to, int count, int layers, double r) {
+  for (int k = 0; k < count; ++k) {
+    const double s = from + (to - from) * k / std::max(1, count - 1), a = 2.399963 * k;  // golden-angle ring
+    const double x = dimension == 3 ? s * std::cos(a) : (k % 2 ? s : -s), y = dimension == 3 ? s * std::sin(a) : 0.0;
+    for (int l = 0; l < layers; ++l) g.push_back(grain(x, y, r + 2 * l * r, r));
+  }
+}
+
+// The heap angle must ignore grains beyond the pile's foot. Stacks 5 grains high stand above 20 % of the
+// heap height, so a fit of every profile point between 20 % and 80 % (the rule before issue 10) took them
+// in and reported a much shallower flank.
+TEST(HeapMeasures, ConicalHeapWithStrayGrains) {
+  const double r = 1e-3, H0 = 0.05, cap = 0.9 * H0, theta = 32.0;
+  const double t = std::tan(theta * kPi / 180), foot = (H0 - 2 * r) / t;
+  for (int layers : {1, 5}) {
+    Grains g;
+    for (int j = -30; j <= 30; ++j)
+      for (int i = -30; i <= 30; ++i) {
+        const double x = i * 2 * r, y = j * 2 * r, s = std::hypot(x, y);
+        if (s <= foot) column(g, x, y, std::max(2 * r, std::min(cap, H0 - t * s)), r);
+      }
+    const std::size_t heap = g.size();
+    strays(g, 3, foot + 10 * r, 3 * foot, 40, layers, r);
+    const HeapMeasures m = heap_measures(g, 3, 0.0, 0.0);
+    ASSERT_TRUE(m.valid) << m.note;
+    EXPECT_NEAR(m.height, cap, 1e-12);
+    EXPECT_NEAR(m.angle_deg, theta, 1e-9) << layers << " grain(s) per stray stack";
+    EXPECT_GE(m.grains_beyond_flank, static_cast<std::int64_t>(g.size() - heap)) << layers;  // strays not fitted
+    EXPECT_LT(m.grains_beyond_flank, static_cast<std::int64_t>(heap)) << layers;
+  }
+}
+
+TEST(HeapMeasures, TwoDimensionalHeapWithStrayGrains) {
+  const double r = 1e-3, H0 = 0.06, theta = 27.0, t = std::tan(theta * kPi / 180), foot = (H0 - 2 * r) / t;
+  Grains g;
+  for (int k = -200; k < 200; ++k) {
+    const double x = (k + 0.5) * 2 * r;
+    if (std::abs(x) <= foot) column(g, x, 0.0, std::max(2 * r, H0 - t * std::abs(x)), r);
+  }
+  strays(g, 2, foot + 10 * r, 3 * foot, 12, 7, r);  // tops at 14 r, above 20 % of the height
+  const HeapMeasures m = heap_measures(g, 2, 0.0, 0.0);
+  ASSERT_TRUE(m.valid) << m.note;
+  EXPECT_NEAR(m.angle_left_deg, theta, 1e-9);
+  EXPECT_NEAR(m.angle_right_deg, theta, 1e-9);
+  EXPECT_GE(m.grains_beyond_flank, 12 * 7);
+}
+
+// ------------------------------------------------------------ g(r), segregation, surface depth
+
+TEST(RadialDistribution, SimpleCubicShellsCountTheirNeighbours) {
+  const double r = 1e-3;
+  const int n = 12, nz = 16;
+  const Grains g = simple_cubic(n, nz, r, 0.0);
+  const Container c = periodic(n * 2 * r, n * 2 * r);
+  const BulkMeasures b = bulk_measures(g, 3, c);
+  const RadialDistribution rdf = radial_distribution(g, 3, c, b);
+  ASSERT_TRUE(rdf.valid);
+  // n(r) = density * g * shell volume: 6 neighbours at d, 12 at sqrt(2) d, 8 at sqrt(3) d, 6 at 2 d.
+  const double density = double(b.grains_in_window) / b.window_volume, d = 2 * r, bin = 0.02 * d;
+  auto neighbours_near = [&](double at) {
+    double n_sum = 0;
+    for (std::size_t k = 0; k < rdf.g.size(); ++k) {
+      const double a = k * bin, bb = (k + 1) * bin;
+      if (std::abs(rdf.r_over_d[k] - at) < 0.05)
+        n_sum += density * rdf.g[k] * 4.0 / 3.0 * kPi * (bb * bb * bb - a * a * a);
+    }
+    return n_sum;
+  };
+  EXPECT_NEAR(neighbours_near(1.0), 6.0, 1e-9);
+  EXPECT_NEAR(neighbours_near(std::sqrt(2.0)), 12.0, 1e-9);
+  EXPECT_NEAR(neighbours_near(std::sqrt(3.0)), 8.0, 1e-9);
+  EXPECT_NEAR(neighbours_near(2.0), 6.0, 1e-9);
+  for (std::size_t k = 0; k < rdf.g.size(); ++k) {
+    if (rdf.r_over_d[k] < 0.97) {
+      EXPECT_EQ(rdf.g[k], 0.0) << rdf.r_over_d[k];
+    }
+  }
+}
+
+TEST(Segregation, VerticalAndRadialIndicesOfKnownArrangements) {
+  // large grains (species 2) in the top two of four layers at heights 0.5, 1.5, 2.5, 3.5
+  Grains g;
+  for (int k = 0; k < 4; ++k)
+    for (int i = 0; i < 6; ++i) {
+      Grain q = grain(i, 0.0, 0.5 + k, k >= 2 ? 0.5 : 0.25);
+      q.species = k >= 2 ? 2 : 1;
+      g.push_back(q);
+    }
+  SegregationIndex s = vertical_segregation(g);
+  ASSERT_TRUE(s.valid) << s.basis;
+  EXPECT_NEAR(s.index, 2 * (3.0 - 1.0) / (3.0 + 1.0), 1e-14);
+  // one polydisperse species: the median radius splits the same grains
+  for (Grain& q : g) q.species = 1;
+  EXPECT_NEAR(vertical_segregation(g).index, 1.0, 1e-14);
+  for (Grain& q : g) q.r = 0.5;
+  EXPECT_FALSE(vertical_segregation(g).valid);
+  // a drum along y: small grains on a ring of radius 1, large ones on radius 3 -> 2 (3 - 1) / 4 = 1
+  Grains drum;
+  for (int k = 0; k < 12; ++k) {
+    const double a = 2 * kPi * k / 12;
+    Grain q = grain(5 + std::cos(a), 7.0 * k, 4 + std::sin(a), 0.1);
+    Grain p = grain(5 + 3 * std::cos(a), -2.0, 4 + 3 * std::sin(a), 0.3);
+    p.species = 2;
+    drum.push_back(q), drum.push_back(p);
+  }
+  s = radial_segregation(drum, Vec3(5, 0, 4), Vec3(0, 1, 0));
+  ASSERT_TRUE(s.valid) << s.basis;
+  EXPECT_NEAR(s.index, 1.0, 1e-12);
+  EXPECT_NEAR(s.mean_small, 1.0, 1e-12);
+}
+
+TEST(SurfaceDepth, DepthBelowTheTopOfEachColumn) {
+  Grains g;
+  column(g, 0.0, 0.0, 0.02, 1e-3);  // 10 grains, top at 0.02
+  column(g, 0.01, 0.0, 0.006, 1e-3);
+  const std::vector<double> depth = surface_depth(g, 2);
+  for (std::size_t i = 0; i < g.size(); ++i)
+    EXPECT_NEAR(depth[i], (g[i].x.x() < 0.005 ? 0.02 : 0.006) - g[i].x.z(), 1e-15) << i;
 }
 
 }  // namespace

@@ -105,7 +105,7 @@ TEST(SceneInputs, EveryShippedSceneLoads) {
     EXPECT_EQ(s.name, entry.path().stem().string());
     EXPECT_GT(s.grains.count, 0);
     DropSequence drops(s, s.seed);
-    EXPECT_EQ(drops.count(), s.grains.count);
+    EXPECT_EQ(drops.count(), s.grains.count + (s.intruder ? 1 : 0));
     const Drop d = drops.next();
     EXPECT_GE(d.r, drops.r_min());
     EXPECT_LE(d.r, drops.r_max());
@@ -138,7 +138,7 @@ TEST(SceneInputs, MixtureAndListScenesAreReadAsWritten) {
 TEST_F(SceneFile, UnknownKeyNamesFileLineAndAllowedKeys) {
   const std::string text = replace(kBase, "size = [0.02, 0.02]", "sise = [0.02, 0.02]");
   EXPECT_EQ(error_of(text),
-            at(text, "sise") + "unknown key 'sise' in [container]; allowed: kind, size, gap, radius, height");
+            at(text, "sise") + "unknown key 'sise' in [container]; allowed: kind, size, gap, radius, height, length");
 }
 
 TEST_F(SceneFile, UnknownKeyInsideAnInlineTable) {
@@ -313,6 +313,36 @@ TEST_F(SceneFile, RadiusWithAListSourceIsAnError) {
                                    "count = 100\n", "");
   EXPECT_EQ(error_of(text).rfind(at(text, "radius") + "grains.radius: not used with source.kind = \"list\"", 0), 0u)
       << error_of(text);
+}
+
+TEST_F(SceneFile, RelaxStopRuleDampingAndMarginAreReadAndChecked) {
+  const std::string good = kBase + "\n[relax]\nstop_rule = \"unbalanced-force\"\nstop_unbalanced_force = 5e-4\n"
+                                   "stop_displacement = 2e-3\ndamping = 0.2\nopen_margin = 4\n";
+  path_ = write("x.toml", good);
+  const Scene s = load_scene(path_);
+  EXPECT_EQ(s.relax.stop_rule, "unbalanced-force");
+  EXPECT_EQ(s.relax.stop_unbalanced_force, 5e-4);
+  EXPECT_EQ(s.relax.stop_displacement, 2e-3);
+  EXPECT_EQ(s.relax.damping, 0.2);
+  EXPECT_EQ(s.relax.open_margin, 4.0);
+  const Scene d = load_scene(write("d.toml", kBase));
+  EXPECT_EQ(d.relax.stop_rule, "kinetic-energy");
+  EXPECT_EQ(d.relax.damping, 0.0) << "damping is off by default";
+
+  std::string text = kBase + "\n[relax]\nstop_rule = \"still\"\n";
+  std::string msg = error_of(text);
+  EXPECT_EQ(msg.rfind(at(text, "stop_rule") + "relax.stop_rule", 0), 0u) << msg;
+  EXPECT_NE(msg.find("unbalanced-force"), std::string::npos) << msg;
+  text = kBase + "\n[relax]\ndamping = 1.0\n";
+  msg = error_of(text);
+  EXPECT_EQ(msg.rfind(at(text, "damping") + "relax.damping", 0), 0u) << msg;
+  EXPECT_NE(msg.find("[0, 1)"), std::string::npos) << msg;
+  text = kBase + "\n[relax]\nstop_unbalanced_force = 0\n";
+  EXPECT_NE(error_of(text).find("relax.stop_unbalanced_force"), std::string::npos);
+  text = kBase + "\n[relax]\nstop_displacement = 2\n";
+  EXPECT_NE(error_of(text).find("relax.stop_displacement"), std::string::npos);
+  text = kBase + "\n[relax]\nopen_margin = -1\n";
+  EXPECT_NE(error_of(text).find("relax.open_margin"), std::string::npos);
 }
 
 TEST_F(SceneFile, TomlSyntaxErrorNamesTheLine) {

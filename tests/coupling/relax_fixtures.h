@@ -2,6 +2,8 @@
 // Small packings and scenes for the coupling tests, made here so the tests do not wait for the BTR
 // engine: grains dropped at random (seeded) in horizontal layers 2.2 radii apart, without overlap,
 // the lowest layer slightly above the floor; a relaxation lets them fall and settle.
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -83,6 +85,7 @@ inline bool fits(const btr::Scene& s, const btr::Vec3& x, double r) {
       return std::abs(x.x()) <= c.size_x / 2 - r && (s.dimension == 2 || std::abs(x.y()) <= c.size_y / 2 - r);
     case btr::ContainerKind::HeleShaw: return std::abs(x.x()) <= c.size_x / 2 - r && std::abs(x.y()) <= c.gap / 2 - r;
     case btr::ContainerKind::Cylinder: return std::hypot(x.x(), x.y()) <= c.radius - r;
+    case btr::ContainerKind::Drum: return false;  // the DEM coupling refuses drums
   }
   return false;
 }
@@ -145,7 +148,9 @@ inline btr::Container container(btr::ContainerKind kind, double a = 0.02, double
 }
 
 inline std::string fresh_dir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("btr_coupling_test_" + name);
+  // The process id keeps concurrent test runs (other worktrees on the same machine) out of each other's way.
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("btr_coupling_test_" + std::to_string(::getpid()) + "_" + name);
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir.string();

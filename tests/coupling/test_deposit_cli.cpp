@@ -71,7 +71,8 @@ TEST(DepositCli, WritesThePackingWithItsMetadata) {
   EXPECT_FALSE(m["version"].get<std::string>().empty());
   for (const char* stage : {"deposition", "check", "writing"}) EXPECT_GT(m["timings"][stage].get<double>(), 0.0) << stage;
   EXPECT_EQ(m["check"]["ok"], true);
-  EXPECT_TRUE(m["metrics"]["heap"]["valid"].get<bool>());
+  EXPECT_TRUE(m["measures"]["heap"]["valid"].get<bool>());
+  EXPECT_EQ(m["measures"]["bulk"]["contact_tolerance"], 1e-7);  // the definition travels with the numbers
   // the stored scene rebuilds this run: it carries the seed and count actually used
   const Scene s = scene_from_json(m["scene"], "meta");
   EXPECT_EQ(s.seed, 7u);
@@ -115,6 +116,40 @@ TEST(DepositCli, ExitCodes) {
   r = btr("deposit " + kHeap + " -o " + (file / "sub").string() + " --count 20");
   EXPECT_EQ(r.code, 3);
   EXPECT_NE(r.err.find("plain_file"), std::string::npos) << r.err;
+}
+
+TEST(MeasureCli, SameMeasuresAsTheDepositAndNamedOptions) {
+  const fs::path dir = scratch() / "measure";
+  ASSERT_EQ(btr("deposit " + kHeap + " -o " + dir.string() + " --count 400 -q").code, 0);
+  const fs::path csv = dir / "heap2d.csv";
+  const CliRun r = btr("measure " + csv.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json measured = nlohmann::json::parse(r.out);
+  const nlohmann::json stored = nlohmann::json::parse(slurp(dir / "heap2d.json"))["measures"];
+  EXPECT_EQ(measured, stored);  // one definition: the deposit stored exactly what `btr measure` computes
+  // options change the numbers and are named next to them
+  const CliRun wide = btr("measure " + csv.string() + " --margin 2 --contact-tolerance 0.01 -o " +
+                          (dir / "m.json").string() + " --per-grain " + (dir / "g.csv").string());
+  ASSERT_EQ(wide.code, 0) << wide.err;
+  const nlohmann::json m = nlohmann::json::parse(slurp(dir / "m.json"));
+  EXPECT_EQ(m["bulk"]["window_margin_diameters"], 2.0);
+  EXPECT_EQ(m["bulk"]["contact_tolerance"], 0.01);
+  EXPECT_GE(m["mean_coordination_all_grains"].get<double>(), stored["mean_coordination_all_grains"].get<double>());
+  std::istringstream rows(slurp(dir / "g.csv"));
+  std::string line;
+  int n = 0;
+  std::getline(rows, line);
+  EXPECT_EQ(line, "id,coordination,in_window,surface_depth");
+  while (std::getline(rows, line)) ++n;
+  EXPECT_EQ(n, 400);
+  // bad input: a packing without its JSON, and a negative margin
+  fs::copy_file(csv, dir / "alone.csv");
+  const CliRun alone = btr("measure " + (dir / "alone.csv").string());
+  EXPECT_EQ(alone.code, 2);
+  EXPECT_NE(alone.err.find((dir / "alone.json").string()), std::string::npos) << alone.err;
+  const CliRun negative = btr("measure " + csv.string() + " --margin -1");
+  EXPECT_EQ(negative.code, 2);
+  EXPECT_NE(negative.err.find("--margin"), std::string::npos) << negative.err;
 }
 
 TEST(BenchCli, PrintsATableAndTheExponent) {

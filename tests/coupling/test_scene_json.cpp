@@ -34,6 +34,8 @@ Scene everything_set() {
   s.source.file = "drops.csv";
   s.relax.engine = "yade", s.relax.model = "hooke", s.relax.max_time = 0.5, s.relax.stop_kinetic_ratio = 1e-7;
   s.relax.timestep_fraction = 0.15, s.relax.timestep = 1e-6;
+  s.relax.stop_rule = "displacement", s.relax.stop_unbalanced_force = 2e-4, s.relax.stop_displacement = 3e-3;
+  s.relax.damping = 0.25, s.relax.open_margin = 7.5;
   return s;
 }
 
@@ -70,6 +72,19 @@ TEST(SceneJson, EveryFieldSurvivesATextRoundTrip) {
   EXPECT_EQ(t.relax.model, "hooke");
   ASSERT_TRUE(t.relax.timestep.has_value());
   EXPECT_EQ(*t.relax.timestep, 1e-6);
+  EXPECT_EQ(t.relax.stop_rule, "displacement");
+  EXPECT_EQ(t.relax.stop_unbalanced_force, 2e-4);
+  EXPECT_EQ(t.relax.stop_displacement, 3e-3);
+  EXPECT_EQ(t.relax.damping, 0.25);
+  EXPECT_EQ(t.relax.open_margin, 7.5);
+  // A packing written before these keys existed reads with their defaults.
+  nlohmann::json old = j;
+  for (const char* k : {"stop_rule", "stop_unbalanced_force", "stop_displacement", "damping", "open_margin"})
+    old["relax"].erase(k);
+  const Scene o = scene_from_json(old, "old");
+  EXPECT_EQ(o.relax.stop_rule, "kinetic-energy");
+  EXPECT_EQ(o.relax.damping, 0.0);
+  EXPECT_EQ(o.relax.open_margin, 10.0);
   EXPECT_EQ(scene_to_json(t), j);
 
   Scene no_step = s;

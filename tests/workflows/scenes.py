@@ -70,3 +70,16 @@ def grains_packing(directory: Path, scene: dict, seed=0) -> str:
     meta = {"scene": scene, "dimension": scene["dimension"], "container": scene["container"], "seed": seed}
     p = Packing(ids=np.arange(1, n + 1), pos=pos, radius=r, species=np.ones(n, int), meta=meta)
     return write_packing(directory, "btr", p)["csv"]
+
+
+def packing_with_scene(directory: Path, name: str, pos, r, kind="periodic", dim=3, size=0.0, source=None,
+                       species=None) -> str:
+    """DIR/NAME.csv + NAME.json of given grains, with a full scene (container `kind`, lateral size `size`,
+    source) so that `btr measure` and `btr relax` can read it. Returns the CSV path."""
+
+    n = len(r)
+    scene = scene_json(kind, dim, size=size, source=source, count=n)
+    meta = {"scene": scene, "dimension": dim, "container": scene["container"]}
+    sp = np.ones(n, int) if species is None else np.asarray(species)
+    p = Packing(ids=np.arange(1, n + 1), pos=np.asarray(pos, float), radius=np.asarray(r, float), species=sp, meta=meta)
+    return write_packing(directory, name, p, vtp=False)["csv"]

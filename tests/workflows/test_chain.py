@@ -7,12 +7,13 @@ import numpy as np
 import pytest
 
 from btrdem.io import read_packing, read_vtp_arrays
+from btrdem.report import fmt as report_fmt
 from scenes import tiny_bed_toml
 
 
 @pytest.mark.parametrize("engine", ["liggghts", "yade"])
 def test_pipeline_with_each_engine(tmp_path, source_dir, btr_binary, engine):
-    scene = tiny_bed_toml(tmp_path / "chain.toml", count=120, max_time=0.03, engine=engine)
+    scene = tiny_bed_toml(tmp_path / "chain.toml", count=300, max_time=0.03, engine=engine)  # deep enough for a bulk window
     out = tmp_path / "out"
     p = subprocess.run([sys.executable, str(source_dir / "workflows" / "btr_workflow.py"), "pipeline", scene,
                         "--engine", engine, "-o", str(out)], capture_output=True, text=True, timeout=300)
@@ -36,6 +37,22 @@ def test_pipeline_with_each_engine(tmp_path, source_dir, btr_binary, engine):
     assert np.allclose(vtp["displacement"], disp) and np.allclose(vtp["points"], relaxed.pos)
     report = (out / "report.md").read_text()
     assert "grains moved > 0.1 d" in report and engine in report
+    # One definition of each measure: btr.json (deposit), relaxed.json (relax) and compare.json hold the
+    # same measures of the same packing, to the last digit.
+    btr_json = json.loads((out / "btr" / "btr.json").read_text())["measures"]
+    relaxed_json = json.loads((out / "relax" / "relaxed.json").read_text())["measures"]
+    assert res["structure"]["pre"] == btr_json
+    assert res["structure"]["post"] == relaxed_json
+    assert relaxed_json != btr_json  # the relaxed packing was measured itself, not copied from the deposit
+    assert btr_json["bulk"]["valid"] and relaxed_json["bulk"]["valid"]
+    # the contact rule counts the grain-grain contacts the engine itself reports (id2 = 0: the floor):
+    # exactly for LIGGGHTS; YADE also keeps a few interactions whose grains have just parted
+    pairs = np.genfromtxt(out / "relax" / "contacts.csv", delimiter=",", names=True)
+    grain_pairs = int(np.count_nonzero(pairs["id2"] > 0))
+    assert relaxed_json["mean_coordination_all_grains"] == pytest.approx(
+        2 * grain_pairs / len(relaxed), rel=1e-12 if engine == "liggghts" else 0.01)
+    for key in ("packing_fraction", "mean_coordination"):
+        assert f"{report_fmt(btr_json['bulk'][key])} |" in report
 
 
 def test_failed_step_keeps_earlier_outputs(tmp_path, source_dir, btr_binary):

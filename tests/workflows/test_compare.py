@@ -7,32 +7,25 @@ import numpy as np
 import pytest
 
 from btrdem.compare import compare
-from btrdem.io import InputError, Packing, read_vtp_arrays, write_packing
+from btrdem.io import InputError, read_vtp_arrays
 from lattices import fcc
+from scenes import packing_with_scene
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
 
-def scene_json(L):
-    return {"dimension": 3, "container": {"kind": "periodic", "size_x": L, "size_y": L, "gap": 0.0, "radius": 0.0,
-                                          "height": 0.0}}
-
-
-def write(tmp_path, name, pos, r, meta):
-    n = len(r)
-    p = Packing(ids=np.arange(1, n + 1), pos=pos, radius=r, species=np.ones(n, int), meta=meta)
-    return write_packing(tmp_path / name, name, p)["csv"]
+def write(tmp_path, name, pos, r, L):
+    return packing_with_scene(tmp_path / name, name, pos, r, "periodic", 3, L)
 
 
 @pytest.fixture
 def pair(tmp_path):
     pos, r, L = fcc(5, 5, d=2e-3)
-    meta = scene_json(L)
     post = pos + np.array([0.3, 0.0, 0.0]) * 2e-3
     post[:, 0] = np.mod(post[:, 0] + 0.5 * L, L) - 0.5 * L
     moved = np.arange(0, len(r), 10)  # every tenth grain moves a further 0.4 d up
     post[moved, 2] += 0.4 * 2e-3
-    return write(tmp_path, "pre", pos, r, meta), write(tmp_path, "post", post, r, meta), moved, len(r)
+    return write(tmp_path, "pre", pos, r, L), write(tmp_path, "post", post, r, L), moved, len(r)
 
 
 def test_compare_outputs_and_numbers(tmp_path, pair):
@@ -48,14 +41,14 @@ def test_compare_outputs_and_numbers(tmp_path, pair):
     assert st["fraction_above_0.1"] == 1.0
     assert st["fraction_above_0.5"] == 0.0  # 0.5 exactly is not above 0.5
     # the lattice itself is unchanged in the rigidly shifted part; the raised grains break contacts
-    assert res["structure"]["pre"]["coordination"]["mean"] == 12.0
-    assert res["structure"]["post"]["coordination"]["mean"] < 12.0
+    assert res["structure"]["pre"]["bulk"]["mean_coordination"] == 12.0
+    assert res["structure"]["post"]["bulk"]["mean_coordination"] < 12.0
     saved = json.loads((out / "compare.json").read_text())
     assert saved["displacement_d"]["mean"] == pytest.approx(st["mean"])
     for name in ("displacement_histogram", "displacement_vs_height", "rdf", "surface_profile"):
         assert (out / "figures" / f"{name}.png").read_bytes()[:8] == PNG
     md = (out / "compare.md").read_text()
-    assert "| packing fraction (bulk) |" in md and "fraction > 0.1 d" in md and "BTR support" in md
+    assert "| packing fraction (bulk, margin 3 d_max) |" in md and "| mean coordination (bulk, contact tolerance 1e-07) |" in md and "fraction > 0.1 d" in md and "BTR support" in md
     vtp = read_vtp_arrays(out / "pre_displacement.vtp")
     assert np.allclose(vtp["displacement"], expected)
     assert np.allclose(vtp["radius"], 1e-3)
@@ -91,3 +84,22 @@ def test_cli_compare_reports_bad_input(tmp_path, source_dir):
                         "-o", str(tmp_path / "o")], capture_output=True, text=True)
     assert p.returncode == 2
     assert "bad.csv:1: expected the header 'id,x,y,z,radius,species'" in p.stderr
+
+
+def test_grains_removed_on_an_open_floor_are_dropped_from_pre(tmp_path):
+    """POST from an open-floor relaxation lists removed PRE ids in relax.removed: compare drops them from PRE
+    (and only them: a shifted grain would show as a displacement) and renumbers as `btr relax` does."""
+    pos, r, L = fcc(5, 5, d=2e-3)
+    meta = scene_json(L)
+    pre_csv = write(tmp_path, "pre", pos, r, {"scene": meta, "dimension": 3})
+    removed = [3, 17]
+    keep = np.setdiff1d(np.arange(1, len(r) + 1), removed) - 1
+    post_meta = {"scene": meta, "dimension": 3, "relax": {"removed": {"count": 2, "ids": removed}}}
+    post_csv = write(tmp_path, "post", pos[keep], r[keep], post_meta)
+    res = compare(pre_csv, post_csv, str(tmp_path / "out"), progress=lambda *_: None)
+    assert res["displacement_d"]["max"] == pytest.approx(0.0, abs=1e-12)
+    # Without the list, the grain counts differ: refused as before.
+    post_meta["relax"]["removed"]["ids"] = []
+    bad_csv = write(tmp_path, "bad", pos[keep], r[keep], post_meta)
+    with pytest.raises(InputError):
+        compare(pre_csv, bad_csv, str(tmp_path / "out2"), progress=lambda *_: None)

@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from btrdem import metrics
+from btrdem import measures
+from btrdem.neighbours import touching_pairs
 from btrdem.io import read_packing
 from btrdem.pour import PourFailure, PourSettings, initial_lattice, pour
 from btrdem.geometry import Container
@@ -22,14 +23,14 @@ def test_pour_into_a_box_is_a_random_packing_at_rest(tmp_path, liggghts):
     c = q.container()
     assert np.all(c.wall_distance(q.pos) >= q.radius * 0.97)          # inside the walls
     assert np.all(q.pos[:, 2] >= q.radius * 0.97)                     # above the floor
-    pairs, dist = metrics.contact_pairs(q.pos, q.radius, c, tol=0.0)
+    pairs, dist = touching_pairs(q.pos, q.radius, c, tol=0.0)
     overlap = (q.radius[pairs[:, 0]] + q.radius[pairs[:, 1]] - dist) / np.minimum(q.radius[pairs[:, 0]],
                                                                                   q.radius[pairs[:, 1]])
     assert overlap.max() < 0.05
-    st = metrics.structure(q.pos, q.radius, q.species, c, window=metrics.Window(1.5, 1.5, 1.5))
+    st = measures.measure(s["packing"], margin=1.5)
     # a poured frictional packing lies between random loose and random close packing
-    assert 0.53 < st["packing_fraction"] < 0.66
-    assert 4.0 < st["coordination"]["mean"] < 7.5
+    assert 0.53 < measures.packing_fraction(st) < 0.66
+    assert 4.0 < measures.coordination(st) < 7.5
     kin = np.genfromtxt(tmp_path / "pour" / "kinetic.csv", delimiter=",", skip_header=1)
     assert kin[-1, 1] < 1e-3 * kin[:, 1].max()                        # came to rest
     assert s["stop_reason"] in ("kinetic-energy", "max-time")

@@ -29,8 +29,8 @@ def run(args, source_dir, timeout=600):
 def test_error_vs_runtime_tiny(tmp_path, source_dir, btr_binary, liggghts):
     scene = tiny_bed_toml(tmp_path / "evr.toml", count=150, max_time=0.04)
     out = tmp_path / "evr"
-    p = run(["error-vs-runtime", scene, "-o", str(out), "--relax-times", "0.005,0.04", "--pours", "0.3:1e-3,1:1e-5"],
-            source_dir)
+    p = run(["error-vs-runtime", scene, "-o", str(out), "--relax-times", "0.005,0.04", "--pours", "0.3:1e-3,1:1e-5",
+             "--margin", "2"], source_dir)
     assert p.returncode == 0, p.stdout + p.stderr
     res = json.loads((out / "error_vs_runtime.json").read_text())
     assert res["reference"]["seeds"] == [1, 2, 3]
@@ -39,6 +39,7 @@ def test_error_vs_runtime_tiny(tmp_path, source_dir, btr_binary, liggghts):
     assert methods[0] == "BTR" and sum(m.startswith("BTR + liggghts relax") for m in methods) == 2
     assert sum(m.startswith("DEM pour") for m in methods) == 2
     for r in res["rows"]:
+        assert r["status"] == "ok" and r["reason"] == ""
         assert r["wall_seconds"] > 0
         assert all(r["errors"][k] is not None and r["errors"][k] >= 0 for k in res["measures"])
     # the BTR + relaxation rows include the deposit's wall time
@@ -50,6 +51,43 @@ def test_error_vs_runtime_tiny(tmp_path, source_dir, btr_binary, liggghts):
     assert all(cell not in ("", "n/a", "None", "nan") for row in rows for cell in row), rows
     assert res["verdict"]["summary"] in md
     assert (out / "error_vs_runtime.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_error_vs_runtime_keeps_going_when_a_method_fails(tmp_path, btr_binary, liggghts, monkeypatch):
+    """A forced engine failure in one method (LIGGGHTS stopped by a 0.01 s wall-time limit) is a row with
+    its reason; the methods after it still run and the table is complete."""
+    from btrdem import btr_cli, error_runtime
+
+    real_relax = btr_cli.relax
+
+    def relax(*args, **kw):
+        if kw.get("label") == "relax-0.005s":
+            kw["time_limit"] = 0.01
+        return real_relax(*args, **kw)
+
+    monkeypatch.setattr(btr_cli, "relax", relax)
+    monkeypatch.setenv("BTR_BINARY", btr_binary)
+    scene = tiny_bed_toml(tmp_path / "evr.toml", count=150, max_time=0.04)
+    out = tmp_path / "evr"
+    res = error_runtime.run_error_vs_runtime(scene, out, relax_times=[0.005, 0.04], pour_variants=[(1.0, 1e-5)],
+                                             margin=2.0, progress=lambda m: None)
+    rows = {r["method"]: r for r in res["rows"]}
+    assert list(rows) == ["BTR", "BTR + liggghts relax 0.005 s", "BTR + liggghts relax 0.04 s",
+                          "DEM pour pace 1 stop 1e-05"]
+    failed = rows["BTR + liggghts relax 0.005 s"]
+    assert failed["status"] == "fail" and "time limit" in failed["reason"] and failed["errors"] is None
+    for name in ("BTR", "BTR + liggghts relax 0.04 s", "DEM pour pace 1 stop 1e-05"):  # before and after it
+        assert rows[name]["status"] == "ok" and rows[name]["errors"]["packing_fraction"] is not None, rows[name]
+    saved = json.loads((out / "error_vs_runtime.json").read_text())
+    assert [r["status"] for r in saved["rows"]] == ["ok", "fail", "ok", "ok"]
+    md = (out / "error_vs_runtime.md").read_text()
+    header, table = table_rows(md, "method | status | reason")
+    assert table == [["BTR + liggghts relax 0.005 s", "fail", failed["reason"]]]
+    header, errors = table_rows(md, "method | wall time [s] | error:")
+    assert len(errors) == 3 + 3 and "Failed methods" in res["verdict"]["summary"]
+    run_json = json.loads((out / "run.json").read_text())
+    steps = {s["name"]: s for s in run_json["steps"]}
+    assert run_json["status"] == "ok" and steps["BTR + liggghts relax 0.005 s"]["status"] == "failed"
 
 
 def test_stability_tiny(tmp_path, source_dir, btr_binary, liggghts, yade):

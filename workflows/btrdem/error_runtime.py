@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import btr_cli, metrics, report
+from . import btr_cli, measures, report
 from .io import atomic_write_text, read_packing, write_json
 from .pipeline import default_outdir, scene_inputs
 from .pour import PourSettings, pour
@@ -32,14 +32,13 @@ MEASURES = {"packing_fraction": "packing fraction", "coordination": "mean coordi
             "angle_of_repose": "angle of repose [deg]", "segregation": "segregation index"}
 
 
-def measures_of(packing_csv: str, window: metrics.Window) -> dict:
-    p = read_packing(packing_csv)
-    heap = metrics.heap_axis_of(p.scene())
-    s = metrics.structure(p.pos, p.radius, p.species, p.container(), None, window, heap)
-    return {"packing_fraction": s["packing_fraction"], "coordination": s["coordination"]["mean"],
-            "rdf": s["rdf"], "angle_of_repose": s["angle_of_repose"]["angle_deg"] if s["angle_of_repose"] else None,
-            "segregation": s["segregation"]["index"] if s["segregation"] else None,
-            "bulk_grains": s["window"]["n_bulk_grains"]}
+def measures_of(packing_csv: str, margin: float | None = None) -> dict:
+    s = measures.measure(packing_csv, margin)
+    r_d, g = measures.rdf(s)
+    return {"packing_fraction": measures.packing_fraction(s), "coordination": measures.coordination(s),
+            "rdf": {"r_over_d": r_d, "g": g}, "angle_of_repose": measures.angle_of_repose(s),
+            "segregation": measures.segregation(s), "bulk_grains": s["bulk"].get("grains_in_window"),
+            "definitions": measures.definitions(s)}
 
 
 def reference_stats(refs: list) -> tuple[dict, dict, list]:
@@ -53,7 +52,7 @@ def reference_stats(refs: list) -> tuple[dict, dict, list]:
                 continue
             g = np.mean(np.array(gs), axis=0)
             mean["rdf"] = {"r_over_d": refs[0]["rdf"]["r_over_d"], "g": g.tolist()}
-            dev = [metrics.rdf_distance(gi, g, refs[0]["rdf"]["r_over_d"]) for gi in gs]
+            dev = [measures.rdf_distance(gi, g, refs[0]["rdf"]["r_over_d"]) for gi in gs]
             floor["rdf"] = float(math.sqrt(np.sum(np.square(dev)) / (len(gs) - 1)))
         else:
             vals = [r[key] for r in refs]
@@ -69,7 +68,7 @@ def errors_of(m: dict, mean: dict, names: list) -> dict:
     out = {}
     for key in names:
         if key == "rdf":
-            out[key] = metrics.rdf_distance(m["rdf"]["g"], mean["rdf"]["g"], mean["rdf"]["r_over_d"])
+            out[key] = measures.rdf_distance(m["rdf"]["g"], mean["rdf"]["g"], mean["rdf"]["r_over_d"])
         else:
             out[key] = None if m[key] is None else abs(m[key] - mean[key])
     return out
@@ -77,7 +76,7 @@ def errors_of(m: dict, mean: dict, names: list) -> dict:
 
 def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts", ref_seeds: int = 3,
                          count: int | None = None, relax_times=None, pour_variants=None, ranks: int = 1,
-                         window: metrics.Window = metrics.Window(), progress=print) -> dict:
+                         margin: float | None = None, progress=print) -> dict:
     if ref_seeds < 3:
         raise StepFailed(f"error-vs-runtime: --ref-seeds: expected at least 3 (the seed-to-seed spread is the "
                          f"error floor), got {ref_seeds}")
@@ -86,7 +85,7 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
     rec = RunRecord(outdir, "error-vs-runtime", inputs=scene_inputs(scene_path), btr=btr, progress=progress,
                     settings={"scene": os.path.abspath(scene_path), "engine": engine, "ref_seeds": ref_seeds,
                               "count": count, "relax_times": relax_times, "pour_variants": pour_variants, "np": ranks,
-                              "window": window.as_dict()})
+                              "margin": margin})
     rows = []
     with rec.step("BTR deposit") as st:
         dep = btr_cli.deposit(btr, scene_path, outdir / "btr", "btr", None, count, progress)
@@ -102,55 +101,67 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
         with rec.step(f"reference pour seed {seed}") as st:
             s = pour(btr_packing, outdir / f"reference_seed{seed}", PourSettings(seed=seed, np=ranks,
                                                                                  label=f"reference-{seed}"), progress)
-            refs.append(measures_of(s["packing"], window))
+            refs.append(measures_of(s["packing"], margin))
             ref_runs.append(s)
             st.update(outputs=[s["packing"]], wall_seconds_engine=s["wall_seconds"], stop_reason=s["stop_reason"])
     mean, floor, names = reference_stats(refs)
     if not names:
         raise StepFailed("error-vs-runtime: the reference pours have no structural measure in common (empty bulk "
-                         "window?); use a larger scene (--count) or smaller window margins")
+                         "window?); use a larger scene (--count) or a smaller window margin (--margin)")
 
-    with rec.step("measure BTR"):
-        m = measures_of(dep["csv"], window)
-        rows.append({"method": "BTR", "kind": "btr", "wall_seconds": dep["wall_seconds"], "values": m,
-                     "errors": errors_of(m, mean, names), "path": dep["csv"]})
+    ref_wall = float(np.mean([s["wall_seconds"] for s in ref_runs]))
+    reference = {"seeds": list(range(1, ref_seeds + 1)), "mean": mean, "floor": floor,
+                 "reach_threshold": reach_threshold(floor, ref_seeds), "values": refs,
+                 "wall_seconds": [s["wall_seconds"] for s in ref_runs],
+                 "stop_reasons": [s["stop_reason"] for s in ref_runs]}
+
+    def write_tables(rows):
+        """error_vs_runtime.json / .md / .png from the rows so far (rewritten after every method)."""
+        done = [r for r in rows if r["status"] == "ok"]
+        verdict = first_to_floor(done, floor, names, ref_wall, ref_seeds)
+        result = {"scene": os.path.abspath(scene_path), "grains": len(btr_packing), "engine": engine,
+                  "reference": reference, "measures": names, "rows": rows, "verdict": verdict}
+        write_json(outdir / "error_vs_runtime.json", result)
+        fig = plot(outdir / "error_vs_runtime.png", done, floor, reach_threshold(floor, ref_seeds), names)
+        atomic_write_text(outdir / "error_vs_runtime.md", markdown(result, os.path.basename(fig)))
+        return result
+
+    def method(label, kind, **fields):
+        return rec.case(label, rows, dict(method=label, kind=kind, values=None, errors=None, **fields),
+                        on_row=write_tables)
+
+    with method("BTR", "btr", wall_seconds=dep["wall_seconds"], path=dep["csv"]) as row:
+        row["values"] = m = measures_of(dep["csv"], margin)
+        row["errors"] = errors_of(m, mean, names)
     for t in relax_times:
         label = f"BTR + {engine} relax {t:.3g} s"
-        with rec.step(label) as st:
+        with method(label, "relax", wall_seconds=None) as row:
             d = outdir / f"relax_{t:.3g}s"
             csv = btr_cli.variant(dep["csv"], d / "input", "btr",
                                   lambda sc, t=t: sc["relax"].update(max_time=float(t)))
             r = btr_cli.relax(btr, csv, engine, d, np=ranks, progress=progress, label=f"relax-{t:.3g}s")
-            m = measures_of(r["csv"], window)
-            rows.append({"method": label, "kind": "relax", "wall_seconds": dep["wall_seconds"] + r["wall_seconds"],
-                         "relax_wall_seconds": r["wall_seconds"], "values": m, "errors": errors_of(m, mean, names),
-                         "path": r["csv"]})
-            st.update(outputs=[r["csv"]])
+            row["values"] = m = measures_of(r["csv"], margin)
+            row.update(wall_seconds=dep["wall_seconds"] + r["wall_seconds"], relax_wall_seconds=r["wall_seconds"],
+                       errors=errors_of(m, mean, names), path=r["csv"])
     for k, (pace, stop) in enumerate(pour_variants):
         label = f"DEM pour pace {pace:g} stop {stop:.0e}"
-        with rec.step(label) as st:
-            seed = ref_seeds + 1 + k
+        seed = ref_seeds + 1 + k
+        with method(label, "pour", wall_seconds=None, seed=seed) as row:
             s = pour(btr_packing, outdir / f"pour_pace{pace:g}_stop{stop:.0e}",
                      PourSettings(seed=seed, np=ranks, pace=pace, stop_ratio=stop, label=f"pour-{pace:g}"), progress)
-            m = measures_of(s["packing"], window)
-            rows.append({"method": label, "kind": "pour", "wall_seconds": s["wall_seconds"], "values": m,
-                         "errors": errors_of(m, mean, names), "path": s["packing"], "seed": seed,
-                         "stop_reason": s["stop_reason"]})
-            st.update(outputs=[s["packing"]])
+            row["values"] = m = measures_of(s["packing"], margin)
+            row.update(wall_seconds=s["wall_seconds"], errors=errors_of(m, mean, names), path=s["packing"],
+                       stop_reason=s["stop_reason"])
 
     with rec.step("table and plot") as st:
-        ref_wall = float(np.mean([s["wall_seconds"] for s in ref_runs]))
-        verdict = first_to_floor(rows, floor, names, ref_wall, ref_seeds)
-        result = {"scene": os.path.abspath(scene_path), "grains": len(btr_packing), "engine": engine,
-                  "reference": {"seeds": list(range(1, ref_seeds + 1)), "mean": mean, "floor": floor,
-                                "reach_threshold": reach_threshold(floor, ref_seeds),
-                                "values": refs, "wall_seconds": [s["wall_seconds"] for s in ref_runs],
-                                "stop_reasons": [s["stop_reason"] for s in ref_runs]},
-                  "measures": names, "rows": rows, "verdict": verdict}
-        write_json(outdir / "error_vs_runtime.json", result)
-        fig = plot(outdir / "error_vs_runtime.png", rows, floor, reach_threshold(floor, ref_seeds), names)
-        atomic_write_text(outdir / "error_vs_runtime.md", markdown(result, os.path.basename(fig)))
-        st.update(outputs=[str(outdir / "error_vs_runtime.md"), fig])
+        result = write_tables(rows)
+        verdict = result["verdict"]
+        st.update(outputs=[str(outdir / "error_vs_runtime.md"), str(outdir / "error_vs_runtime.png")])
+        failed = [r["method"] for r in rows if r["status"] != "ok"]
+        if failed:
+            verdict["summary"] += f" Failed methods (rows with their reasons): {', '.join(failed)}."
+            write_json(outdir / "error_vs_runtime.json", result)
+            atomic_write_text(outdir / "error_vs_runtime.md", markdown(result, "error_vs_runtime.png"))
     rec.finish({"verdict": verdict["summary"]})
     progress(verdict["summary"])
     return result
@@ -179,7 +190,9 @@ def first_to_floor(rows, floor, names, ref_wall, n_seeds) -> dict:
             "cost_ratio_to_cheapest_pour_reaching": (hit["wall_seconds"] / pour_hit["wall_seconds"]) if pour_hit else None,
             "cheapest_pour_reaching": pour_hit["method"] if pour_hit else None}
     a = per["all"]
-    if a is None:
+    if not rows:
+        summary = "No method finished."
+    elif a is None:
         closest = min(rows, key=lambda r: max((r["errors"][k] or math.inf) / max(limit[k], 1e-300) for k in names))
         worst = max((closest["errors"][k] or math.inf) / max(limit[k], 1e-300) for k in names)
         summary = (f"No method reaches the reference's error floor in every measure; the closest is "
@@ -232,12 +245,17 @@ def markdown(res: dict, fig_name: str) -> str:
             [("curve" if k == "rdf" else report.fmt(ref["mean"][k])) for k in names] + ["-"],
             ["floor (seed-to-seed std s)", "-"] + [report.fmt(ref["floor"][k]) for k in names] + ["-"],
             ["reached below 2 s sqrt(1 + 1/n)", "-"] + [report.fmt(ref["reach_threshold"][k]) for k in names] + ["-"]]
+    failed = []
     for r in res["rows"]:
+        if r["status"] != "ok":
+            failed.append([r["method"], r["status"], r["reason"]])
+            continue
         ok = all(r["errors"][k] is not None and r["errors"][k] <= ref["reach_threshold"][k] for k in names)
         rows.append([r["method"], r["wall_seconds"]] + [r["errors"][k] for k in names] + ["yes" if ok else "no"])
     vals = [["method"] + [MEASURES[k] for k in names if k != "rdf"]]
     for r in res["rows"]:
-        vals.append([r["method"]] + [r["values"][k] for k in names if k != "rdf"])
+        if r["status"] == "ok":
+            vals.append([r["method"]] + [r["values"][k] for k in names if k != "rdf"])
     lines = [f"# Error against run time: {os.path.basename(res['scene'])}", "",
              f"{res['grains']} grains; engine {res['engine']}; reference: LIGGGHTS pours with seeds "
              f"{ref['seeds']} (stop: {', '.join(ref['stop_reasons'])}). Wall times were measured in this run, "
@@ -247,6 +265,12 @@ def markdown(res: dict, fig_name: str) -> str:
                                  [[MEASURES[k], per[k]["method"] if per[k] else "none",
                                    per[k]["wall_seconds"] if per[k] else "-",
                                    per[k]["cost_ratio_to_reference_pour"] if per[k] else "-"] for k in names]))
-    lines += ["## Errors", "", report.md_table(headers, rows), "## Values", "",
-              report.md_table(vals[0], vals[1:]), f"![error vs run time]({fig_name})", ""]
+    lines += ["## Errors", "", report.md_table(headers, rows)]
+    if failed:
+        lines += ["## Failed methods", "", report.md_table(["method", "status", "reason"], failed)]
+    defs = next((r["values"]["definitions"] for r in res["rows"] if r["status"] == "ok"), None)
+    lines += ["## Values", "", report.md_table(vals[0], vals[1:])]
+    if defs:
+        lines += [f"Measured by `btr measure`: {defs}.", ""]
+    lines += [f"![error vs run time]({fig_name})", ""]
     return "\n".join(lines)

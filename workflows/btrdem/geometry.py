@@ -53,7 +53,7 @@ class Container:
     # ---- coordinates: 3D uses (x, y, z); 2D uses (x, z) -------------------------------------------
 
     def coords(self, pos: np.ndarray) -> np.ndarray:
-        """The coordinates metrics work in: (x, y, z) in 3D, (x, z) in 2D (last column is height)."""
+        """The coordinates the neighbour search works in: (x, y, z) in 3D, (x, z) in 2D (last column is height)."""
         return pos if self.dimension == 3 else pos[:, [0, 2]]
 
     def periods(self) -> np.ndarray:

@@ -13,7 +13,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from . import btr_cli, report
+from . import btr_cli, measures, report
 from .compare import compare
 from .io import atomic_write_text, read_json, read_scene_toml
 from .runner import REPO, RunRecord, find_btr
@@ -67,8 +67,10 @@ def summary_numbers(dep, rel, res) -> dict:
     return {"grains": sp["n_grains"], "btr_wall_seconds": dep["wall_seconds"], "relax_wall_seconds": rel["wall_seconds"],
             "moved_above_0.1d": res["displacement_d"]["fraction_above_0.1"],
             "moved_above_0.5d": res["displacement_d"]["fraction_above_0.5"],
-            "packing_fraction_btr": sp["packing_fraction"], "packing_fraction_relaxed": sq["packing_fraction"],
-            "coordination_btr": sp["coordination"]["mean"], "coordination_relaxed": sq["coordination"]["mean"],
+            "packing_fraction_btr": measures.packing_fraction(sp),
+            "packing_fraction_relaxed": measures.packing_fraction(sq),
+            "coordination_btr": measures.coordination(sp), "coordination_relaxed": measures.coordination(sq),
+            "definitions": measures.definitions(sp),
             "change_packing_fraction": res["changes"]["packing_fraction"],
             "change_coordination": res["changes"]["coordination_mean"]}
 
@@ -89,7 +91,7 @@ def pipeline_report(outdir: Path, scene_path, engine, dep, rel, res) -> str:
                              [["BTR deposit", dep["wall_seconds"], "btr/btr.csv"],
                               [f"{engine} relaxation", rel["wall_seconds"], "relax/relaxed.csv"]]),
              f"Relaxation stopped by: {stop or 'see relax/relaxed.json'}. {rel['stdout']}", "",
-             "## What DEM changed", "",
+             "## What DEM changed", "", f"Measures by `btr measure` ({s['definitions']}).", "",
              report.md_table(["measure", "BTR", "relaxed", "change"],
                              [["packing fraction (bulk)", s["packing_fraction_btr"], s["packing_fraction_relaxed"],
                                s["change_packing_fraction"]],

@@ -168,14 +168,18 @@ class RunRecord:
     def save(self):
         write_json(self.path, self.data)
 
-    @contextlib.contextmanager
-    def step(self, name: str):
-        """Times a step and records it; on failure records the error and raises StepFailed."""
+    def _start(self, name: str):
+        """A new step entry in run.json, saved at once; returns it and its start time."""
         entry = {"name": name, "status": "running", "started": datetime.datetime.now().isoformat(timespec="seconds")}
         self.data["steps"].append(entry)
         self.save()
         self.progress(f"== {name}")
-        t0 = time.monotonic()
+        return entry, time.monotonic()
+
+    @contextlib.contextmanager
+    def step(self, name: str):
+        """Times a step and records it; on failure records the error and raises StepFailed."""
+        entry, t0 = self._start(name)
         try:
             yield entry
         except BaseException as e:
@@ -191,6 +195,39 @@ class RunRecord:
         entry.update(status="ok", wall_seconds=time.monotonic() - t0)
         self.save()
         self.progress(f"   {name}: done in {entry['wall_seconds']:.1f} s")
+
+    @contextlib.contextmanager
+    def case(self, name: str, rows: list, row: dict, on_row=None):
+        """One case of a study, the way every study runs them: `row` joins `rows` at once with status
+        "running"; the body fills it in. If the body raises, the row gets status "fail" and the reason
+        (the error's first line), run.json records the error, and the study goes on with the next case
+        (only KeyboardInterrupt and bad input stop it). A row the body leaves "running" ends "ok".
+        on_row(rows), if given, rewrites the study's tables after every case, so they grow as it runs."""
+        row.setdefault("status", "running")
+        row.setdefault("reason", "")
+        rows.append(row)
+        entry, t0 = self._start(name)
+        try:
+            yield row
+        except (KeyboardInterrupt, InputError):
+            entry.update(status="failed", wall_seconds=time.monotonic() - t0)
+            self.save()
+            raise
+        except Exception as e:  # noqa: BLE001 - a failed case is a row with its reason, not a failed study
+            message = str(e).strip() or type(e).__name__
+            lines = [x.strip() for x in message.splitlines() if x.strip()]
+            reason = " ".join(lines[:2]) if lines[0].endswith(":") else lines[0]  # "X failed:\n<why>"
+            row.update(status="fail", reason=reason[:300])
+            entry.update(status="failed", wall_seconds=time.monotonic() - t0, error=message[-3000:])
+            self.progress(f"   {name}: FAILED ({row['reason']}); the study goes on")
+        else:
+            if row["status"] == "running":
+                row["status"] = "ok"
+            entry.update(status="ok", wall_seconds=time.monotonic() - t0)
+            self.progress(f"   {name}: {row['status']} in {entry['wall_seconds']:.1f} s")
+        self.save()
+        if on_row is not None:
+            on_row(rows)
 
     def finish(self, summary: dict | None = None):
         self.data["status"] = "ok"

@@ -22,7 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import btr_cli, dem_params, metrics, report
+from . import btr_cli, dem_params, report
+from .neighbours import touching_pairs
 from .io import atomic_write_text, read_packing, read_scene_toml, write_json, write_scene_toml
 from .runner import REPO, RunRecord, StepFailed, find_btr
 
@@ -96,7 +97,7 @@ def check_result(relaxed_csv: str, n_expected: int, kinetic_threshold: float) ->
     outside = (p.pos[:, 2] < -0.5 * p.radius) | (c.wall_distance(p.pos) < -0.5 * p.radius)
     if np.any(outside):
         return "fail", f"grains lost: grain {int(p.ids[np.argmax(outside)])} left the container", info
-    pairs, dist = metrics.contact_pairs(p.pos, p.radius, c, tol=0.0)
+    pairs, dist = touching_pairs(p.pos, p.radius, c, tol=0.0)
     worst = 0.0
     if len(pairs):
         ri, rj = p.radius[pairs[:, 0]], p.radius[pairs[:, 1]]
@@ -152,31 +153,55 @@ def run_stability(outdir=None, engines=("liggghts", "yade"), base_scene: str | N
     base_packing = read_packing(dep["csv"])
     r_max = float(np.max(base_packing.radius))
     results = []
+
+    def write_tables(rows):
+        """stability.json / .md / .png from the rows so far (rewritten after every case)."""
+        rule = timestep_rule_verdict(rows)
+        res = {"engines": list(engines), "max_steps": max_steps, "overlap_bound": OVERLAP_BOUND, "cases": rows,
+               "timestep_rule": rule, "base_scene": str(base_path)}
+        write_json(outdir / "stability.json", res)
+        fig = heatmap(outdir / "stability.png", rows, engines)
+        atomic_write_text(outdir / "stability.md", markdown(res, os.path.basename(fig)))
+        return res
+
     for param, value in build_cases(sweep):
         case = "base" if param == "base" else f"{param}={value:g}"
         cdir = outdir / "cases" / case.replace("=", "_")
-        with rec.step(f"case {case}") as st:
-            try:
-                csv, timestep_x = _case_input(btr, param, value, base, dep["csv"], cdir, r_max, max_steps, progress)
-            except StepFailed as e:  # a case whose input cannot be built is a failed case, not a failed sweep
-                for engine in engines:
-                    results.append({"case": case, "parameter": param, "value": value, "engine": engine,
-                                    "status": "fail", "reason": f"input: {str(e).splitlines()[0]}", "wall_seconds": 0.0})
-                continue
-            p = read_packing(csv)
-            sc = p.scene()
-            dt, _ = dem_params.stable_timestep(p.radius, p.species, sc, float(sc["relax"]["timestep_fraction"]))
-            threshold = dem_params.kinetic_threshold(p.radius, p.species, sc, float(sc["relax"]["stop_kinetic_ratio"]))
-            for engine in engines:
-                edir = cdir / engine
-                ts = dt * timestep_x if timestep_x is not None else None
-                r = btr_cli.relax(btr, csv, engine, edir, np=ranks, timestep=ts, progress=progress,
+        built = {}
+
+        def case_input(param=param, value=value, cdir=cdir, built=built):
+            """The case's packing and settings, built once for all engines; a case whose input cannot be
+            built fails in every engine with the reason "input: ..."."""
+            if "error" not in built and "csv" not in built:
+                try:
+                    built["csv"], built["timestep_x"] = _case_input(btr, param, value, base, dep["csv"], cdir, r_max,
+                                                                    max_steps, progress)
+                except StepFailed as e:
+                    built["error"] = f"input: {str(e).splitlines()[0]}"
+                else:
+                    p = read_packing(built["csv"])
+                    sc = p.scene()
+                    built["grains"] = len(p)
+                    built["max_time"] = float(sc["relax"]["max_time"])
+                    built["dt"], _ = dem_params.stable_timestep(p.radius, p.species, sc,
+                                                                float(sc["relax"]["timestep_fraction"]))
+                    built["threshold"] = dem_params.kinetic_threshold(p.radius, p.species, sc,
+                                                                      float(sc["relax"]["stop_kinetic_ratio"]))
+            if "error" in built:
+                raise StepFailed(built["error"])
+            return built
+
+        for engine in engines:
+            row = {"case": case, "parameter": param, "value": value, "engine": engine, "wall_seconds": 0.0}
+            with rec.case(f"case {case} / {engine}", results, row, on_row=write_tables):
+                c = case_input()
+                ts = c["dt"] * c["timestep_x"] if c["timestep_x"] is not None else None
+                r = btr_cli.relax(btr, c["csv"], engine, cdir / engine, np=ranks, timestep=ts, progress=progress,
                                   label=f"{case}-{engine}", check=False)
-                row = {"case": case, "parameter": param, "value": value, "engine": engine,
-                       "wall_seconds": r["wall_seconds"], "timestep": ts or dt,
-                       "steps": int(round(float(sc["relax"]["max_time"]) / (ts or dt))), "grains": len(p)}
+                row.update(wall_seconds=r["wall_seconds"], timestep=ts or c["dt"],
+                           steps=int(round(c["max_time"] / (ts or c["dt"]))), grains=c["grains"])
                 if r["returncode"] == 0:
-                    status, reason, info = check_result(r["csv"], len(p), threshold)
+                    status, reason, info = check_result(r["csv"], c["grains"], c["threshold"])
                     row.update(info)
                 elif r["returncode"] == 2:
                     # refused by the coupling before any engine ran: a step above the stable one,
@@ -186,18 +211,10 @@ def run_stability(outdir=None, engines=("liggghts", "yade"), base_scene: str | N
                     status, reason = "fail", classify_failure(r["error"] or "")
                     row["error"] = (r["error"] or "")[:2000]
                 row.update(status=status, reason=reason)
-                results.append(row)
-                progress(f"  {case} / {engine}: {status}{' (' + reason + ')' if reason else ''}, "
-                         f"{r['wall_seconds']:.1f} s")
-            st.update(outputs=[str(cdir)])
     with rec.step("table and heat map") as st:
-        rule = timestep_rule_verdict(results)
-        res = {"engines": list(engines), "max_steps": max_steps, "overlap_bound": OVERLAP_BOUND, "cases": results,
-               "timestep_rule": rule, "base_scene": str(base_path)}
-        write_json(outdir / "stability.json", res)
-        fig = heatmap(outdir / "stability.png", results, engines)
-        atomic_write_text(outdir / "stability.md", markdown(res, os.path.basename(fig)))
-        st.update(outputs=[str(outdir / "stability.md"), fig])
+        res = write_tables(results)
+        rule = res["timestep_rule"]
+        st.update(outputs=[str(outdir / "stability.md"), str(outdir / "stability.png")])
     rec.finish({"timestep_rule": rule["summary"]})
     progress(rule["summary"])
     return res

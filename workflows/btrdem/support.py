@@ -13,7 +13,7 @@ import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
 from .geometry import Container
-from .metrics import contact_pairs
+from .neighbours import touching_pairs
 
 SUPPORT_TOLERANCE = 1e-5  # BTR contacts touch exactly; relative gap accepted as touching
 
@@ -69,7 +69,7 @@ def btr_supports(pos: np.ndarray, r: np.ndarray, container: Container, tol: floa
     """
     n = len(r)
     dim = container.dimension
-    pairs, _ = contact_pairs(pos, r, container, tol)
+    pairs, _ = touching_pairs(pos, r, container, tol)
     neighbours = [[] for _ in range(n)]
     for i, j in pairs:
         neighbours[max(i, j)].append(min(i, j))  # the later grain rests on the earlier one

@@ -1,0 +1,115 @@
+#include "measures_json.h"
+
+#include <cstdio>
+
+namespace btr_app {
+
+using nlohmann::json;
+
+namespace {
+
+json profile_json(const std::vector<btr::ProfilePoint>& p) {
+  json coord = json::array(), top = json::array();
+  for (const btr::ProfilePoint& q : p) coord.push_back(q.distance), top.push_back(q.top);
+  return {{"coord", coord}, {"height", top}};
+}
+
+json segregation_json(const btr::SegregationIndex& s) {
+  if (!s.valid) return {{"valid", false}, {"note", s.basis}};
+  return {{"valid", true}, {"index", s.index}, {"mean_large", s.mean_large}, {"mean_small", s.mean_small},
+          {"basis", s.basis}};
+}
+
+}  // namespace
+
+btr::PackingMeasures measure_in_scene(const btr::Grains& grains, const btr::Scene& scene,
+                                      const btr::MetricsOptions& options) {
+  const bool point = scene.source.kind == btr::SourceSpec::Kind::Point;
+  return btr::measure_packing(grains, scene.dimension, scene.container, options, point, scene.source.x,
+                              scene.source.y);
+}
+
+json measures_to_json(const btr::PackingMeasures& m) {
+  const btr::MetricsOptions& o = m.options;
+  const btr::BulkMeasures& b = m.bulk;
+  json bulk = {{"valid", b.valid},
+               {"note", b.note},
+               {"window_margin_diameters", o.margin_diameters},
+               {"window_rule", "bulk window: margin x largest diameter from the floor, the side walls and the "
+                               "free surface (columns one largest diameter wide)"},
+               {"contact_tolerance", o.contact_tol},
+               {"contact_rule", "contact: gap < contact_tolerance x smaller radius (overlaps count)"}};
+  if (b.valid) {
+    bulk.update({{"window", b.slab ? "z-slab" : "box"},
+                 {"window_lo", {b.window.lo.x(), b.window.lo.y(), b.window.lo.z()}},
+                 {"window_hi", {b.window.hi.x(), b.window.hi.y(), b.window.hi.z()}},
+                 {"window_volume", b.window_volume},
+                 {"grains_in_window", b.grains_in_window},
+                 {"packing_fraction", b.packing_fraction},
+                 {"mean_coordination", b.mean_coordination},
+                 {"coordination_histogram", b.coordination_histogram}});
+  }
+  json rdf = nullptr;
+  if (m.rdf.valid)
+    rdf = {{"r_over_d", m.rdf.r_over_d}, {"g", m.rdf.g}, {"bin_d", o.rdf_bin_d},
+           {"centres", "grains centred in the bulk window"}};
+  json heap = nullptr;
+  if (m.heap_source) {
+    const btr::HeapMeasures& h = m.heap;
+    heap = {{"valid", h.valid},
+            {"axis", {m.source_x, m.source_y}},
+            {"profile_of", h.by_sides ? "x - axis x (each side fitted)" : "distance from the axis"},
+            {"height", h.height},
+            {"fit_band", {btr::HeapMeasures::kLowFraction, btr::HeapMeasures::kHighFraction}},
+            {"fit_rule", "least-squares line through the surface profile of the pile from the apex outwards, from "
+                         "where it first falls to the upper fraction of the height to where it first falls below "
+                         "the lower one (or meets an empty bin)"},
+            {"profile_points", h.profile_points},
+            {"grains_beyond_flank", h.grains_beyond_flank},
+            {"profile", profile_json(h.profile)}};
+    if (h.valid) {
+      heap["angle_of_repose_deg"] = h.angle_deg;
+      if (h.by_sides) heap["angle_left_deg"] = h.angle_left_deg, heap["angle_right_deg"] = h.angle_right_deg;
+    } else {
+      heap["note"] = h.note;
+    }
+  }
+  return {{"n_grains", m.n_grains},
+          {"mean_diameter", m.mean_diameter},
+          {"largest_diameter", m.largest_diameter},
+          {"mean_coordination_all_grains", m.mean_coordination_all},
+          {"bulk", bulk},
+          {"rdf", rdf},
+          {"heap", heap},
+          {"surface_profile_x", profile_json(m.profile_x)},
+          {"segregation", segregation_json(m.segregation)},
+          {"height", {{"max_top", m.max_top}, {"mean_centre", m.mean_centre_height}}}};
+}
+
+std::string measures_summary(const btr::PackingMeasures& m) {
+  char buf[600];
+  const btr::BulkMeasures& b = m.bulk;
+  if (b.valid)
+    std::snprintf(buf, sizeof buf,
+                  "  bulk: packing fraction %.4f, mean coordination %.3f (%lld grains; window margin %g largest "
+                  "diameters, contact tolerance %g; %s)\n",
+                  b.packing_fraction, b.mean_coordination, static_cast<long long>(b.grains_in_window),
+                  m.options.margin_diameters, m.options.contact_tol, b.note.c_str());
+  else
+    std::snprintf(buf, sizeof buf, "  bulk: no measure (%s)\n", b.note.c_str());
+  std::string out = buf;
+  if (m.heap_source) {
+    const btr::HeapMeasures& h = m.heap;
+    if (h.valid && h.by_sides)
+      std::snprintf(buf, sizeof buf, "  heap: height %.4g m, angle of repose %.2f deg (left %.2f, right %.2f)\n",
+                    h.height, h.angle_deg, h.angle_left_deg, h.angle_right_deg);
+    else if (h.valid)
+      std::snprintf(buf, sizeof buf, "  heap: height %.4g m, angle of repose %.2f deg\n", h.height, h.angle_deg);
+    else
+      std::snprintf(buf, sizeof buf, "  heap: height %.4g m, no angle of repose (%s)\n", h.height, h.note.c_str());
+    out += buf;
+  }
+  return out;
+}
+
+}  // namespace btr_app
