@@ -181,10 +181,12 @@ int run(const Options& o, const CLI::App& cmd) {
       std::printf("  check: %s in %.3f s\n", report.ok() ? "ok" : "FAILED", check_seconds);
     if (o.forces)
       std::printf("  forces: %zu contacts; floor and walls carry %.12g of the weight (%.6g N); %zu unbalanced "
-                  "grains; %lld lifted (upward load %.3g of the weight); %lld pushed sideways (largest lateral "
-                  "load %.3g of the vertical; left to friction); wrote %s/%s.forces.csv, .forces.vtp\n",
+                  "grains; %lld with a singular support set (carried by a smaller subset); %lld lifted (upward load %.3g "
+                  "of the weight); %lld pushed sideways (largest lateral load %.3g of a grain's weight; left to "
+                  "friction); wrote %s/%s.forces.csv, .forces.vtp\n",
                   network.contacts.size(), network.container_force.z() / network.total_weight, network.total_weight,
-                  network.unbalanced.size(), static_cast<long long>(network.lifted_grains),
+                  network.unbalanced.size(), static_cast<long long>(network.singular_grains),
+                  static_cast<long long>(network.lifted_grains),
                   network.lifted_force / network.total_weight, static_cast<long long>(network.lateral_grains),
                   network.largest_lateral, o.out.c_str(), name.c_str());
     std::printf("  wrote %s/%s.csv, .json, .vtp in %.3f s; %.3f s in all\n", o.out.c_str(), name.c_str(),

@@ -24,6 +24,7 @@ struct Support {
 struct Split {
   std::vector<double> lambda;  // per support, >= 0
   Vec3 residual = Vec3::Zero();
+  bool singular = false;       // a subset of `dimension` supports was singular and skipped
 };
 
 // Non-negative normal forces lambda_k with sum lambda_k n_k = -load: the first subset (by size, then
@@ -54,10 +55,10 @@ Split split_load(const std::vector<Support>& s, const Vec3& load, int dimension,
         l(0) = rhs(0);
       } else if (size == 2) {
         const Eigen::Matrix2d g2 = gram.topLeftCorner<2, 2>();
-        if (g2.determinant() < 1e-10) ok = false;  // collinear: the single supports cover it
+        if (g2.determinant() < 1e-10) ok = false, best.singular |= dimension == 2;  // collinear
         else l.head<2>() = g2.inverse() * rhs.head<2>();
       } else {
-        if (gram.determinant() < 1e-10) ok = false;  // coplanar: the pairs cover it
+        if (gram.determinant() < 1e-10) ok = false, best.singular = true;  // coplanar: the pairs cover it
         else l = gram.inverse() * rhs;
       }
       if (ok) {
@@ -153,6 +154,7 @@ ForceNetwork static_forces(const Grains& grains, int dimension, const Container&
           split.lambda.assign(supports.size(), 0.0);
           for (std::size_t k = 0; k < where.size(); ++k) split.lambda[where[k]] = u.lambda[k];
           split.residual = u.residual;
+          split.singular = u.singular;
         }
       }
       if (split.lambda.empty()) split = split_load(supports, vertical, dimension, residual_tol);
@@ -164,10 +166,11 @@ ForceNetwork static_forces(const Grains& grains, int dimension, const Container&
     } else if (split.residual.norm() > residual_tol * vertical.norm()) {
       net.unbalanced.push_back({id, split.residual, vertical.norm()});
     }
+    if (split.singular) ++net.singular_grains;
     const double lateral = std::hypot(load[ii].x(), load[ii].y());
     if (lateral > 0.0) {
       ++net.lateral_grains;
-      net.largest_lateral = std::max(net.largest_lateral, lateral / vertical.norm());
+      net.largest_lateral = std::max(net.largest_lateral, lateral / weights[ii]);
     }
     for (std::size_t k = 0; k < supports.size(); ++k) {
       const Support& s = supports[k];

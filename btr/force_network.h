@@ -45,7 +45,7 @@ struct ForceNetwork {
   std::vector<ContactForce> contacts;      // sorted by i, then by j (walls and floor first)
   std::vector<UnbalancedGrain> unbalanced; // grains whose vertical load is not carried (a broken packing)
   // Grains pushed sideways by the grains above (the lateral part of the load, left to friction):
-  // their number and the largest lateral part, as a fraction of the grain's vertical load.
+  // their number and the largest lateral part, as a fraction of the grain's own weight.
   std::int64_t lateral_grains = 0;
   double largest_lateral = 0.0;
   // Grains whose net vertical load points up: a later grain leaning on them below its equator
@@ -54,6 +54,10 @@ struct ForceNetwork {
   // So: container_force.z() == total_weight + lifted_force - sum of the unbalanced residuals' z.
   std::int64_t lifted_grains = 0;
   double lifted_force = 0.0;
+  // Grains with a singular support set (collinear normals in 2D, coplanar in 3D, e.g. two supports
+  // in a line with the load): the rule is the smallest subset of supports (by size, then by partner
+  // order) that carries the vertical load exactly; the others get zero force. Counted, never silent.
+  std::int64_t singular_grains = 0;
   double total_weight = 0.0;               // [N]
   Vec3 container_force = Vec3::Zero();     // sum of the forces the floor and walls exert [N]
 };
