@@ -1,6 +1,5 @@
 #include "coupling/preload.h"
 
-#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -79,70 +78,86 @@ Preloaded preload_packing(const Grains& grains, const Scene& scene) {
     if (delta[k] / r > out.largest_relative) out.largest_relative = delta[k] / r, out.largest_depth = delta[k];
   }
 
+  // Grains are lowered, never moved sideways: s_i >= 0 is grain i's downward move. A contact k of
+  // grain i on partner j (s_j already known: supports come first in id order; the floor and walls do
+  // not move) gets the overlap gap_k(s_i - s_j) = |d_k - (s_i - s_j) e_z| - (r_i + r_j). One number
+  // per grain cannot match three overlaps exactly, so s_i minimises the squared misfit
+  // sum_k (overlap_k - delta_k)^2 over the grain's loaded contacts (1D Newton on the exact distances).
+  // Why vertical only: the lateral moves that would match every overlap exactly are ill-conditioned
+  // for grains on steep supports (measured: up to 0.07 r moves for 1e-3 r overlaps, overlapping
+  // hundreds of neighbours that are not contacts), while a column sinks as a whole, so neighbours
+  // that are not in contact keep their gaps to within the overlaps' size.
+  std::vector<double> sink(moved.size(), 0.0);
+  struct Term {
+    Vec3 d;       // x_i - x_j (the partner's image), original positions; for a wall: its normal
+    double s_j;   // the partner's downward move
+    double reach; // r_i + r_j; for a wall: r_i
+    double delta; // the law's overlap
+    bool wall;
+    double gap0;  // the wall's gap before the move
+  };
+  std::vector<Term> terms;
   std::vector<Obstacle> walls;
-  std::vector<Obstacle> obstacles;
-  std::vector<double> targets;
   std::size_t k = 0;
+  double misfit_sq = 0.0;
+  std::size_t misfit_count = 0;
   for (std::size_t i = 0; i < moved.size(); ++i) {
     const std::int64_t id = static_cast<std::int64_t>(i) + 1;
-    obstacles.clear();
-    targets.clear();
+    terms.clear();
     container_walls(c, dim, grains[i].r, walls);
-    Vec3 shift_sum = Vec3::Zero();
-    int grain_supports = 0;
+    double mean_partner = 0.0;
+    int partners = 0;
     for (; k < contacts.size() && contacts[k].i == id; ++k) {
       const ContactForce& cf = contacts[k];
+      Term t{};
       if (cf.j > 0) {
         const std::size_t j = static_cast<std::size_t>(cf.j - 1);
-        Obstacle o;
-        o.kind = Obstacle::Kind::Sphere;
-        o.c = moved[j].x + cf.shift;
-        o.R = grains[i].r + grains[j].r;
-        obstacles.push_back(o);
-        Vec3 s = moved[j].x - grains[j].x;
-        if (c.kind == ContainerKind::Periodic) {  // a support wrapped across the period
-          s.x() -= c.size_x * std::round(s.x() / c.size_x);
-          if (dim == 3) s.y() -= c.size_y * std::round(s.y() / c.size_y);
-        }
-        shift_sum += s;
-        ++grain_supports;
+        t.d = grains[i].x - (grains[j].x + cf.shift);
+        t.s_j = sink[j];
+        t.reach = grains[i].r + grains[j].r;
+        mean_partner += sink[j], ++partners;
       } else {
-        obstacles.push_back(walls[static_cast<std::size_t>(-cf.j)]);
+        const Obstacle& w = walls[static_cast<std::size_t>(-cf.j)];
+        t.d = w.normal(grains[i].x);
+        t.wall = true;
+        t.gap0 = w.gap(grains[i].x);
+        ++partners;
       }
-      targets.push_back(-delta[k]);
+      t.delta = delta[k];
+      if (cf.f.norm() > 0.0) terms.push_back(t);
     }
-    if (obstacles.empty()) continue;
-    Vec3 x = grains[i].x + (grain_supports ? Vec3(shift_sum / grain_supports) : Vec3::Zero());
-    // Gauss-Newton with minimum-norm steps on gap_k(x) = -delta_k (in 2D in the x-z plane).
-    const int cols = dim;
-    const int m = static_cast<int>(obstacles.size());
-    Eigen::MatrixXd J(m, cols);
-    Eigen::VectorXd g(m);
-    for (int it = 0; it < kNewtonIterations; ++it) {
-      for (int a = 0; a < m; ++a) {
-        const Vec3 n = obstacles[a].normal(x);
-        g(a) = obstacles[a].gap(x) - targets[a];
-        if (dim == 3) J.row(a) << n.x(), n.y(), n.z();
-        else J.row(a) << n.x(), n.z();
+    auto overlap = [&](const Term& t, double s) {  // overlap of the contact with grain i lowered by s
+      if (t.wall) return -(t.gap0 - s * t.d.z());
+      const Vec3 d = t.d - Vec3(0.0, 0.0, s - t.s_j);
+      return t.reach - d.norm();
+    };
+    auto slope = [&](const Term& t, double s) {  // d overlap / d s
+      if (t.wall) return t.d.z();
+      const Vec3 d = t.d - Vec3(0.0, 0.0, s - t.s_j);
+      return d.z() / d.norm();
+    };
+    // Start from the partners' mean move (a grain with no loaded contact just sinks with them).
+    double s = partners ? mean_partner / partners : 0.0;
+    for (int it = 0; it < kNewtonIterations && !terms.empty(); ++it) {
+      double grad = 0.0, hess = 0.0;
+      for (const Term& t : terms) {
+        const double e = overlap(t, s) - t.delta, a = slope(t, s);
+        grad += e * a;
+        hess += a * a;
       }
-      if (g.cwiseAbs().maxCoeff() < 1e-14 * grains[i].r) break;
-      const Eigen::VectorXd step = J.completeOrthogonalDecomposition().solve(-g);
-      if (dim == 3) x += Vec3(step(0), step(1), step(2));
-      else x += Vec3(step(0), 0.0, step(1));
-      if (step.norm() < 1e-16 * grains[i].r) break;
+      if (!(hess > 0.0)) break;  // only horizontal contacts (walls): a vertical move changes nothing
+      const double step = -grad / hess;
+      s += step;
+      if (std::abs(step) < 1e-14 * grains[i].r) break;
     }
-    if (c.kind == ContainerKind::Periodic) {
-      x.x() -= c.size_x * std::floor(x.x() / c.size_x + 0.5);
-      if (dim == 3) x.y() -= c.size_y * std::floor(x.y() / c.size_y + 0.5);
-    }
-    moved[i].x = x;
-    Vec3 d = x - grains[i].x;
-    if (c.kind == ContainerKind::Periodic) {
-      d.x() -= c.size_x * std::round(d.x() / c.size_x);
-      if (dim == 3) d.y() -= c.size_y * std::round(d.y() / c.size_y);
-    }
-    out.largest_move = std::max(out.largest_move, d.norm());
+    for (const Term& t : terms) misfit_sq += std::pow(overlap(t, s) - t.delta, 2), ++misfit_count;
+    for (const Term& t : terms)
+      out.largest_misfit = std::max(out.largest_misfit, std::abs(overlap(t, s) - t.delta) / grains[i].r);
+    sink[i] = s;
+    moved[i].x.z() -= s;
+    out.largest_move = std::max(out.largest_move, std::abs(s));
   }
+  out.rms_misfit = misfit_count ? std::sqrt(misfit_sq / static_cast<double>(misfit_count)) : 0.0;
   return out;
 }
 

@@ -5,11 +5,10 @@
 // set to match, coupling/README.md) gives the overlap that carries it:
 //   Hertz  F = 4/3 Y* sqrt(R*) delta^(3/2)   (R* = r_i r_j / (r_i + r_j); a wall: R* = r)
 //   Hooke  F = k_n delta, k_n = hooke_stiffness(R*, m*, Y*, V) (timestep.h; a wall: m* = m)
-// The grains are then moved in id order (deposition order: every support is moved before the grains
-// it carries) so that the distance to each (already moved) support is r_i + r_j - delta_ij, by
-// Gauss-Newton on those distance equations from the grain's position shifted by the mean shift of
-// its supports (minimum-norm steps: a grain with fewer supports than the dimension keeps its
-// position along the free directions).
+// The grains are then lowered in id order (deposition order: every support is lowered before the
+// grains it carries), each by the one vertical move that best gives its loaded contacts the law's
+// overlaps (least squares on the exact distances; preload.cpp says why vertical only). The overlaps
+// accumulate from the floor up, so the bed starts compressed as it is under its weight.
 #include <cstdint>
 #include <map>
 #include <utility>
@@ -34,6 +33,10 @@ struct Preloaded {
   double largest_relative = 0.0;  // largest intended overlap / smaller radius of its pair
   double largest_depth = 0.0;     // [m]
   double largest_move = 0.0;      // largest displacement of a grain [m]
+  // Misfit of the loaded contacts' overlaps against the law's (one vertical move per grain cannot
+  // match three overlaps exactly): the largest relative to the grain's radius, and the rms [m].
+  double largest_misfit = 0.0;
+  double rms_misfit = 0.0;
 };
 
 // Throws std::runtime_error if the network has unbalanced grains whose vertical load is not carried
