@@ -1,5 +1,6 @@
 #include "coupling/preload.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -17,6 +18,10 @@ namespace {
 // A grain whose vertical load is not carried beyond this fraction cannot be pre-loaded.
 constexpr double kVerticalResidual = 1e-6;
 constexpr int kNewtonIterations = 30;
+// Weight of the pull towards the grain's column (preload_packing), relative to a contact's.
+constexpr double kRegularisation = 0.1;
+// A fit further than this many times the grain's deepest overlap from its column is not used.
+constexpr double kFallback = 4.0;
 
 const Component& component_of(const Scene& scene, const Grain& g) {
   return scene.grains.components[component_index(scene, g.species)];
@@ -78,84 +83,100 @@ Preloaded preload_packing(const Grains& grains, const Scene& scene) {
     if (delta[k] / r > out.largest_relative) out.largest_relative = delta[k] / r, out.largest_depth = delta[k];
   }
 
-  // Grains are lowered, never moved sideways: s_i >= 0 is grain i's downward move. A contact k of
-  // grain i on partner j (s_j already known: supports come first in id order; the floor and walls do
-  // not move) gets the overlap gap_k(s_i - s_j) = |d_k - (s_i - s_j) e_z| - (r_i + r_j). One number
-  // per grain cannot match three overlaps exactly, so s_i minimises the squared misfit
-  // sum_k (overlap_k - delta_k)^2 over the grain's loaded contacts (1D Newton on the exact distances).
-  // Why vertical only: the lateral moves that would match every overlap exactly are ill-conditioned
-  // for grains on steep supports (measured: up to 0.07 r moves for 1e-3 r overlaps, overlapping
-  // hundreds of neighbours that are not contacts), while a column sinks as a whole, so neighbours
-  // that are not in contact keep their gaps to within the overlaps' size.
+  // Grain i (supports first: id order) is moved to x minimising
+  //   sum_k (gap_k(x) + delta_k)^2 + mu^2 |x - x_col|^2,   x_col = x_i - (mean_j s_j + mean_k delta_k) e_z
+  // over its loaded contacts k (gap_k to the already moved partner, or to the floor/wall), s_j the
+  // partners' downward moves: Gauss-Newton with Levenberg-Marquardt regularisation (mu = kRegularisation).
+  // With three well-spread supports the contacts fix x and the overlaps match the law to within a few
+  // percent of mu^2; a grain wedged between supports at nearly its own height (normals almost
+  // horizontal, an ill-conditioned fit) would instead be pushed by delta / n_z ~ ten times its overlap,
+  // up and sideways into neighbours that are not its contacts (measured without mu: moves of 0.07 r for
+  // 1e-3 r overlaps, hundreds of new overlaps): mu keeps it near its column, such a contact starts with
+  // less than its overlap and the engine finishes it. Steps are limited to the deepest overlap, and a
+  // fit that ends further than kFallback overlaps from the column is replaced by the column move
+  // (counted in column_fallbacks). A lowered grain with fewer supports than the
+  // dimension keeps its position along the free directions (the regularisation holds it).
   std::vector<double> sink(moved.size(), 0.0);
-  struct Term {
-    Vec3 d;       // x_i - x_j (the partner's image), original positions; for a wall: its normal
-    double s_j;   // the partner's downward move
-    double reach; // r_i + r_j; for a wall: r_i
-    double delta; // the law's overlap
-    bool wall;
-    double gap0;  // the wall's gap before the move
-  };
-  std::vector<Term> terms;
-  std::vector<Obstacle> walls;
+  std::vector<Vec3> unwrapped(moved.size());  // moved centres before wrapping into the period
+  std::vector<Obstacle> walls, obstacles;
+  std::vector<double> targets;
   std::size_t k = 0;
   double misfit_sq = 0.0;
   std::size_t misfit_count = 0;
+  const int cols = dim;
+  auto to_vec = [&](const Eigen::VectorXd& v) { return dim == 3 ? Vec3(v(0), v(1), v(2)) : Vec3(v(0), 0.0, v(1)); };
+  auto from_vec = [&](const Vec3& v) {
+    Eigen::VectorXd e(cols);
+    if (dim == 3) e << v.x(), v.y(), v.z();
+    else e << v.x(), v.z();
+    return e;
+  };
   for (std::size_t i = 0; i < moved.size(); ++i) {
     const std::int64_t id = static_cast<std::int64_t>(i) + 1;
-    terms.clear();
+    obstacles.clear();
+    targets.clear();
     container_walls(c, dim, grains[i].r, walls);
-    double mean_partner = 0.0;
+    double mean_partner = 0.0, mean_delta = 0.0;
     int partners = 0;
     for (; k < contacts.size() && contacts[k].i == id; ++k) {
       const ContactForce& cf = contacts[k];
-      Term t{};
       if (cf.j > 0) {
         const std::size_t j = static_cast<std::size_t>(cf.j - 1);
-        t.d = grains[i].x - (grains[j].x + cf.shift);
-        t.s_j = sink[j];
-        t.reach = grains[i].r + grains[j].r;
-        mean_partner += sink[j], ++partners;
-      } else {
-        const Obstacle& w = walls[static_cast<std::size_t>(-cf.j)];
-        t.d = w.normal(grains[i].x);
-        t.wall = true;
-        t.gap0 = w.gap(grains[i].x);
+        mean_partner += sink[j];
         ++partners;
+        if (!(cf.f.norm() > 0.0)) continue;
+        Obstacle o;
+        o.kind = Obstacle::Kind::Sphere;
+        o.c = unwrapped[j] + cf.shift;
+        o.R = grains[i].r + grains[j].r;
+        obstacles.push_back(o);
+      } else {
+        ++partners;
+        if (!(cf.f.norm() > 0.0)) continue;
+        obstacles.push_back(walls[static_cast<std::size_t>(-cf.j)]);
       }
-      t.delta = delta[k];
-      if (cf.f.norm() > 0.0) terms.push_back(t);
+      targets.push_back(delta[k]);
+      mean_delta += delta[k];
     }
-    auto overlap = [&](const Term& t, double s) {  // overlap of the contact with grain i lowered by s
-      if (t.wall) return -(t.gap0 - s * t.d.z());
-      const Vec3 d = t.d - Vec3(0.0, 0.0, s - t.s_j);
-      return t.reach - d.norm();
-    };
-    auto slope = [&](const Term& t, double s) {  // d overlap / d s
-      if (t.wall) return t.d.z();
-      const Vec3 d = t.d - Vec3(0.0, 0.0, s - t.s_j);
-      return d.z() / d.norm();
-    };
-    // Start from the partners' mean move (a grain with no loaded contact just sinks with them).
-    double s = partners ? mean_partner / partners : 0.0;
-    for (int it = 0; it < kNewtonIterations && !terms.empty(); ++it) {
-      double grad = 0.0, hess = 0.0;
-      for (const Term& t : terms) {
-        const double e = overlap(t, s) - t.delta, a = slope(t, s);
-        grad += e * a;
-        hess += a * a;
+    if (!targets.empty()) mean_delta /= static_cast<double>(targets.size());
+    const double column = (partners ? mean_partner / partners : 0.0) + mean_delta;
+    const Vec3 x_col = grains[i].x - Vec3(0.0, 0.0, column);
+    Vec3 x = x_col;
+    const int m = static_cast<int>(obstacles.size());
+    Eigen::MatrixXd J(m, cols);
+    Eigen::VectorXd g(m);
+    const double mu2 = kRegularisation * kRegularisation;
+    const double deepest = m > 0 ? *std::max_element(targets.begin(), targets.end()) : 0.0;
+    const double trust = deepest + 1e-9 * grains[i].r;
+    for (int it = 0; it < kNewtonIterations && m > 0; ++it) {
+      for (int a = 0; a < m; ++a) {
+        g(a) = obstacles[a].gap(x) + targets[a];
+        J.row(a) = from_vec(obstacles[a].normal(x)).transpose();
       }
-      if (!(hess > 0.0)) break;  // only horizontal contacts (walls): a vertical move changes nothing
-      const double step = -grad / hess;
-      s += step;
-      if (std::abs(step) < 1e-14 * grains[i].r) break;
+      const Eigen::MatrixXd A = J.transpose() * J + mu2 * Eigen::MatrixXd::Identity(cols, cols);
+      const Eigen::VectorXd b = -(J.transpose() * g + mu2 * from_vec(x - x_col));
+      Vec3 step = to_vec(A.ldlt().solve(b));
+      if (step.norm() > trust) step *= trust / step.norm();  // Gauss-Newton overshoots on wedged grains
+      x += step;
+      if (step.norm() < 1e-14 * grains[i].r) break;
     }
-    for (const Term& t : terms) misfit_sq += std::pow(overlap(t, s) - t.delta, 2), ++misfit_count;
-    for (const Term& t : terms)
-      out.largest_misfit = std::max(out.largest_misfit, std::abs(overlap(t, s) - t.delta) / grains[i].r);
-    sink[i] = s;
-    moved[i].x.z() -= s;
-    out.largest_move = std::max(out.largest_move, std::abs(s));
+    if ((x - x_col).norm() > kFallback * deepest) {  // no good fit near the column: sink with it
+      x = x_col;
+      ++out.column_fallbacks;
+    }
+    for (int a = 0; a < m; ++a) {
+      const double e = obstacles[a].gap(x) + targets[a];
+      misfit_sq += e * e, ++misfit_count;
+      out.largest_misfit = std::max(out.largest_misfit, std::abs(e) / grains[i].r);
+    }
+    sink[i] = grains[i].x.z() - x.z();
+    out.largest_move = std::max(out.largest_move, (x - grains[i].x).norm());
+    unwrapped[i] = x;
+    if (c.kind == ContainerKind::Periodic) {
+      x.x() -= c.size_x * std::floor(x.x() / c.size_x + 0.5);
+      if (dim == 3) x.y() -= c.size_y * std::floor(x.y() / c.size_y + 0.5);
+    }
+    moved[i].x = x;
   }
   out.rms_misfit = misfit_count ? std::sqrt(misfit_sq / static_cast<double>(misfit_count)) : 0.0;
   return out;

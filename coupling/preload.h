@@ -5,10 +5,10 @@
 // set to match, coupling/README.md) gives the overlap that carries it:
 //   Hertz  F = 4/3 Y* sqrt(R*) delta^(3/2)   (R* = r_i r_j / (r_i + r_j); a wall: R* = r)
 //   Hooke  F = k_n delta, k_n = hooke_stiffness(R*, m*, Y*, V) (timestep.h; a wall: m* = m)
-// The grains are then lowered in id order (deposition order: every support is lowered before the
-// grains it carries), each by the one vertical move that best gives its loaded contacts the law's
-// overlaps (least squares on the exact distances; preload.cpp says why vertical only). The overlaps
-// accumulate from the floor up, so the bed starts compressed as it is under its weight.
+// The grains are then moved in id order (deposition order: every support is moved before the grains
+// it carries), each to the position that best gives its loaded contacts the law's overlaps (regularised
+// least squares on the exact distances, preload.cpp). The overlaps accumulate from the floor up, so
+// the bed starts compressed as it is under its weight.
 #include <cstdint>
 #include <map>
 #include <utility>
@@ -37,6 +37,7 @@ struct Preloaded {
   // match three overlaps exactly): the largest relative to the grain's radius, and the rms [m].
   double largest_misfit = 0.0;
   double rms_misfit = 0.0;
+  std::int64_t column_fallbacks = 0;  // grains given their column's move (no good fit, preload.cpp)
 };
 
 // Throws std::runtime_error if the network has unbalanced grains whose vertical load is not carried

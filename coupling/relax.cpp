@@ -141,14 +141,15 @@ Packing starting_packing(const Packing& packing, const Scene& scene, const Relax
                          {"largest_move", p.largest_move},
                          {"largest_misfit", p.largest_misfit},
                          {"rms_misfit", p.rms_misfit},
+                         {"column_fallbacks", p.column_fallbacks},
                          {"unbalanced_grains", p.forces.unbalanced.size()},
                          {"largest_unbalanced_fraction", lateral}};
   intended = std::move(p.intended);
   std::cout << "pre-load (" << scene.relax.model << "): " << p.forces.contacts.size()
             << " contacts, largest intended overlap " << g6(p.largest_relative) << " of the smaller radius ("
-            << g6(p.largest_depth) << " m), grains lowered by up to " << g6(p.largest_move)
+            << g6(p.largest_depth) << " m), grains moved by up to " << g6(p.largest_move)
             << " m, overlap misfit against the law rms " << g6(p.rms_misfit) << " m (largest " << g6(p.largest_misfit)
-            << " of a radius); "
+            << " of a radius), " << p.column_fallbacks << " grains sunk with their column; "
             << p.forces.unbalanced.size() << " grains with a lateral load their supports do not carry (largest "
             << g6(lateral) << " of the load; left to friction)\n";
   write_packing(out_dir, "preloaded", out);
