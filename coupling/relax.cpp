@@ -132,8 +132,6 @@ Packing starting_packing(const Packing& packing, const Scene& scene, const Relax
   Packing out;
   out.grains = std::move(p.grains);
   out.meta = packing.meta.is_object() ? packing.meta : nlohmann::json::object();
-  double lateral = 0.0;
-  for (const UnbalancedGrain& u : p.forces.unbalanced) lateral = std::max(lateral, u.residual.norm() / u.load);
   out.meta["preload"] = {{"model", scene.relax.model},
                          {"contacts", p.forces.contacts.size()},
                          {"largest_intended_overlap", p.largest_relative},
@@ -142,16 +140,17 @@ Packing starting_packing(const Packing& packing, const Scene& scene, const Relax
                          {"largest_misfit", p.largest_misfit},
                          {"rms_misfit", p.rms_misfit},
                          {"column_fallbacks", p.column_fallbacks},
-                         {"unbalanced_grains", p.forces.unbalanced.size()},
-                         {"largest_unbalanced_fraction", lateral}};
+                         {"lifted_grains", p.forces.lifted_grains},
+                         {"lateral_grains", p.forces.lateral_grains},
+                         {"largest_lateral_load", p.forces.largest_lateral}};
   intended = std::move(p.intended);
   std::cout << "pre-load (" << scene.relax.model << "): " << p.forces.contacts.size()
             << " contacts, largest intended overlap " << g6(p.largest_relative) << " of the smaller radius ("
             << g6(p.largest_depth) << " m), grains moved by up to " << g6(p.largest_move)
             << " m, overlap misfit against the law rms " << g6(p.rms_misfit) << " m (largest " << g6(p.largest_misfit)
             << " of a radius), " << p.column_fallbacks << " grains sunk with their column; "
-            << p.forces.unbalanced.size() << " grains with a lateral load their supports do not carry (largest "
-            << g6(lateral) << " of the load; left to friction)\n";
+            << p.forces.lateral_grains << " grains with a lateral load left to friction (largest "
+            << g6(p.forces.largest_lateral) << " of a grain's weight)\n";
   write_packing(out_dir, "preloaded", out);
   write_forces(out_dir, "preloaded", packing.grains, p.forces);
   return out;
