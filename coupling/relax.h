@@ -20,6 +20,8 @@ struct RelaxSettings {
   // never refused; the run records that it was forced. Never set on the default path.
   std::optional<double> forced_timestep;
   double max_overlap = 0.05;        // refuse packings whose largest overlap / smaller radius exceeds this
+                                    // (with a pre-load: the overlap beyond the intended one)
+  bool preload = false;             // pre-loaded start (preload.h); also on when the scene sets relax.preload
   std::optional<double> damping;    // overrides the scene's relax.damping
 };
 

@@ -251,7 +251,8 @@ std::string yade_script(const Packing& packing, const Scene& scene, const RelaxP
       << "STEPS_PER_CHECK = " << sched.steps_per_check << "\n"
       << "AVERAGE_EVERY = " << sched.average_every << "  # steps between samples of the mean\n"
       << "MAX_CHECKS = " << sched.max_checks << "  # max_time " << num(plan.max_time) << " s\n"
-      << "ARMING_TIME = " << num(sched.arming_time) << "  # s, sqrt(2 r_min / g)\n"
+      << "ARMING_TIME = " << num(sched.arming_time)
+      << (plan.arming_time > 0.0 ? "  # s, pre-loaded start: sqrt(2 delta_max / g)\n" : "  # s, sqrt(2 r_min / g)\n")
       << "STOP_RULE = " << py_string(plan.stop_rule) << "\n"
       << "UNBALANCED_THRESHOLD = " << num(plan.unbalanced_threshold) << "  # utils.unbalancedForce()\n"
       << "DISPLACEMENT_THRESHOLD = " << num(plan.displacement_threshold)

@@ -370,6 +370,15 @@ TEST_F(SceneFile, RelaxStopRuleDampingAndMarginAreReadAndChecked) {
   EXPECT_NE(error_of(text).find("relax.open_margin"), std::string::npos);
 }
 
+TEST_F(SceneFile, RelaxPreloadIsABoolean) {
+  EXPECT_FALSE(load_scene(write("d.toml", kBase)).relax.preload) << "off by default";
+  EXPECT_TRUE(load_scene(write("p.toml", kBase + "\n[relax]\npreload = true\n")).relax.preload);
+  const std::string text = kBase + "\n[relax]\npreload = 1\n";
+  const std::string msg = error_of(text);
+  EXPECT_EQ(msg.rfind(at(text, "preload") + "relax.preload", 0), 0u) << msg;
+  EXPECT_NE(msg.find("true or false"), std::string::npos) << msg;
+}
+
 TEST_F(SceneFile, TomlSyntaxErrorNamesTheLine) {
   const std::string text = replace(kBase, "count = 100", "count = = 100");
   const std::string msg = error_of(text);

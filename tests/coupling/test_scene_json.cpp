@@ -37,6 +37,7 @@ Scene everything_set() {
   s.relax.timestep_fraction = 0.15, s.relax.timestep = 1e-6;
   s.relax.stop_rule = "displacement", s.relax.stop_unbalanced_force = 2e-4, s.relax.stop_displacement = 3e-3;
   s.relax.damping = 0.25, s.relax.open_margin = 7.5;
+  s.relax.preload = true;
   return s;
 }
 
@@ -78,14 +79,16 @@ TEST(SceneJson, EveryFieldSurvivesATextRoundTrip) {
   EXPECT_EQ(t.relax.stop_displacement, 3e-3);
   EXPECT_EQ(t.relax.damping, 0.25);
   EXPECT_EQ(t.relax.open_margin, 7.5);
+  EXPECT_TRUE(t.relax.preload);
   // A packing written before these keys existed reads with their defaults.
   nlohmann::json old = j;
-  for (const char* k : {"stop_rule", "stop_unbalanced_force", "stop_displacement", "damping", "open_margin"})
+  for (const char* k : {"stop_rule", "stop_unbalanced_force", "stop_displacement", "damping", "open_margin", "preload"})
     old["relax"].erase(k);
   const Scene o = scene_from_json(old, "old");
   EXPECT_EQ(o.relax.stop_rule, "kinetic-energy");
   EXPECT_EQ(o.relax.damping, 0.0);
   EXPECT_EQ(o.relax.open_margin, 10.0);
+  EXPECT_FALSE(o.relax.preload);
   EXPECT_EQ(scene_to_json(t), j);
 
   Scene no_step = s;
