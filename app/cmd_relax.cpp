@@ -21,6 +21,7 @@ Runner add_relax_command(CLI::App& app) {
     double damping = 0.0;
     double target_phi = 0.0;
     double target_margin = btr::MetricsOptions{}.margin_diameters;
+    std::vector<double> friction_scales = btr::target_phi_schedule();
     std::string stop_rule;
   };
   auto o = std::make_shared<Options>();
@@ -51,6 +52,11 @@ Runner add_relax_command(CLI::App& app) {
                   "reached, then restore the friction and settle (default: the scene's relax.target_phi, unset = "
                   "one relaxation)")
       ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--friction-scales", o->friction_scales,
+                  "--target-phi: the friction scales tried in turn, decreasing in [0, 1) (e.g. 0 goes straight to a "
+                  "frictionless stage)")
+      ->delimiter(',')
+      ->capture_default_str();
   cmd->add_option("--target-margin", o->target_margin,
                   "bulk window of --target-phi: this many largest diameters from floor, walls and free surface "
                   "(btr measure --margin)")
@@ -77,7 +83,7 @@ Runner add_relax_command(CLI::App& app) {
       if (p.scene.relax.target_phi) {
         btr::TargetPhiResult t =
             btr::relax_to_target_phi(p.packing, p.scene, engine, o->settings, *p.scene.relax.target_phi, o->out,
-                                     btr::target_phi_schedule(), o->target_margin);
+                                     o->friction_scales, o->target_margin);
         std::cout << "target phi " << *p.scene.relax.target_phi << ": "
                   << (t.reached ? "reached" : "NOT reached (frictionless stage still below)") << " after "
                   << t.stages.size() - 1 << " reduced-friction stage(s); settled bulk phi "

@@ -48,6 +48,8 @@ def ints(text: str) -> list:
 
 
 def pour_variants(text: str) -> list:
+    if text.strip() in ("", "none"):
+        return []
     out = []
     for item in text.split(","):
         try:
@@ -106,6 +108,8 @@ def main(argv=None) -> int:
     e.add_argument("--damping", type=float, default=0.5, help="damping of the damped method (default 0.5)")
     e.add_argument("--target-phi", default="pour",
                    help="target of the target-phi method: 'pour' (the reference pours' mean) or a number")
+    e.add_argument("--friction-scales", type=floats,
+                   help="target-phi method: friction scales tried in turn (default btr relax's 0.5,0.25,...,0)")
     e.add_argument("--shakes", type=int, default=10, help="btr shake cycles of the shake method (default 10)")
     e.add_argument("--reuse-pours", action="store_true",
                    help="reuse pours already finished in the output folder with the same settings and grains "
@@ -172,7 +176,8 @@ def main(argv=None) -> int:
             kw = dict(engine=args.engine, ref_seeds=args.ref_seeds, relax_times=args.relax_times,
                       pour_variants=args.pours, ranks=args.np, margin=args.margin, progress=progress,
                       methods=[m for m in args.methods.split(",") if m], damping=args.damping,
-                      target_phi=args.target_phi, shakes=args.shakes, reuse_pours=args.reuse_pours)
+                      target_phi=args.target_phi, shakes=args.shakes, reuse_pours=args.reuse_pours,
+                      friction_scales=args.friction_scales)
             if args.counts:
                 run_size_study(args.scene, args.counts, args.out, **kw)
             else:

@@ -87,7 +87,8 @@ def errors_of(m: dict, mean: dict, names: list) -> dict:
 def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts", ref_seeds: int = 3,
                          count: int | None = None, relax_times=None, pour_variants=None, ranks: int = 1,
                          margin: float | None = None, progress=print, methods=METHODS, damping: float = 0.5,
-                         target_phi="pour", shakes: int = 10, reuse_pours: bool = False) -> dict:
+                         target_phi="pour", shakes: int = 10, reuse_pours: bool = False,
+                         friction_scales=None) -> dict:
     if ref_seeds < 3:
         raise StepFailed(f"error-vs-runtime: --ref-seeds: expected at least 3 (the seed-to-seed spread is the "
                          f"error floor), got {ref_seeds}")
@@ -97,7 +98,8 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
                     settings={"scene": os.path.abspath(scene_path), "engine": engine, "ref_seeds": ref_seeds,
                               "count": count, "relax_times": relax_times, "pour_variants": pour_variants, "np": ranks,
                               "margin": margin, "methods": list(methods), "damping": damping,
-                              "target_phi": target_phi, "shakes": shakes, "reuse_pours": reuse_pours})
+                              "target_phi": target_phi, "shakes": shakes, "reuse_pours": reuse_pours,
+                              "friction_scales": friction_scales})
     bad = [m for m in methods if m not in METHODS]
     if bad:
         raise StepFailed(f"error-vs-runtime: --methods: expected some of {', '.join(METHODS)}, got {', '.join(bad)}")
@@ -179,10 +181,13 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
                       dep["wall_seconds"])
     if "target-phi" in methods:
         target = mean["packing_fraction"] if target_phi == "pour" else float(target_phi)
-        with method(f"BTR + {engine} target phi {target:.4g} damped {damping:g}", "target", wall_seconds=None,
+        scales = "" if friction_scales is None else ",".join(f"{x:g}" for x in friction_scales)
+        with method(f"BTR + {engine} target phi {target:.4g} damped {damping:g}" +
+                    (f" friction scales {scales}" if scales else ""), "target", wall_seconds=None,
                     target_phi=target) as row:
-            r = relax_row(row, "relax_target_phi", dep["csv"],
+            r = relax_row(row, "relax_target_phi" + (f"_{scales}" if scales else ""), dep["csv"],
                           ["--target-phi", repr(float(target)), "--damping", repr(float(damping))] +
+                          (["--friction-scales", scales] if scales else []) +
                           (["--target-margin", repr(float(margin))] if margin is not None else []), dep["wall_seconds"])
             row["target_phi_stages"] = read_json(Path(r["csv"]).with_suffix(".json")).get("target_phi")
     if "shake" in methods:
@@ -369,6 +374,7 @@ def finished_study(folder: Path, scene_path: str, count: int, kwargs: dict) -> d
             "ref_seeds": kwargs.get("ref_seeds", 3), "margin": kwargs.get("margin"),
             "methods": list(kwargs.get("methods", METHODS)), "damping": kwargs.get("damping", 0.5),
             "target_phi": kwargs.get("target_phi", "pour"), "shakes": kwargs.get("shakes", 10),
+            "friction_scales": kwargs.get("friction_scales"),
             "relax_times": kwargs.get("relax_times"),
             "pour_variants": None if kwargs.get("pour_variants") is None else [list(v) for v in kwargs["pour_variants"]]}
     if run.get("status") != "ok" or any(st.get(k) != v for k, v in want.items()):
@@ -463,4 +469,7 @@ def plot_sizes(path: Path, done: list) -> str | None:
 
 def _size_label(method: str) -> str:
     # "target phi 0.6271" differs with N: one line per kind of method
-    return method.rsplit(" target phi", 1)[0] + " target phi" if " target phi" in method else method
+    if " target phi " not in method:
+        return method
+    head, tail = method.split(" target phi ", 1)
+    return head + " target phi" + (" " + tail.split(" ", 1)[1] if " " in tail else "")
