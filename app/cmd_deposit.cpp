@@ -13,8 +13,10 @@
 #include "btr/run_scene.h"
 #include "btr/scene_toml.h"
 #include "commands.h"
+#include "coupling/force_io.h"
 #include "measures_json.h"
 #include "coupling/packing_io.h"
+#include "coupling/preload.h"
 #include "coupling/scene_json.h"
 #include "progress.h"
 
@@ -27,7 +29,7 @@ struct Options {
   std::string scene, out, name;
   std::uint64_t seed = 0;
   std::int64_t count = 0;
-  bool check = false, quiet = false;
+  bool check = false, quiet = false, forces = false;
 };
 
 double seconds_since(std::chrono::steady_clock::time_point t) {
@@ -145,6 +147,29 @@ int run(const Options& o, const CLI::App& cmd) {
     return kInternalFailure;
   }
 
+  // ---- static force network
+  btr::ForceNetwork network;
+  if (o.forces) {
+    try {
+      network = btr::packing_forces(grains, scene);
+      btr::write_forces(o.out, name, grains, network);
+    } catch (const std::exception& e) {
+      std::cerr << "btr deposit: force network: " << e.what() << "\n";
+      return kInternalFailure;
+    }
+    if (!network.unbalanced.empty()) {
+      const btr::UnbalancedGrain* worst = &network.unbalanced.front();
+      for (const btr::UnbalancedGrain& u : network.unbalanced)
+        if (u.residual.norm() / u.load > worst->residual.norm() / worst->load) worst = &u;
+      std::fprintf(stderr,
+                   "btr deposit: force network: %zu grain(s) whose supports cannot carry their load with "
+                   "non-negative normal forces (the rest is left unbalanced, not given negative forces); worst: "
+                   "grain %lld, %.3g of its %.3g N load (%.3g N vertically)\n",
+                   network.unbalanced.size(), static_cast<long long>(worst->id), worst->residual.norm() / worst->load,
+                   worst->load, worst->residual.z());
+    }
+  }
+
   // ---- summary
   if (!o.quiet) {
     const double rate = result.wall_seconds > 0 ? n / result.wall_seconds : 0.0;
@@ -154,6 +179,16 @@ int run(const Options& o, const CLI::App& cmd) {
     std::fputs(measures_summary(measures).c_str(), stdout);
     if (o.check)
       std::printf("  check: %s in %.3f s\n", report.ok() ? "ok" : "FAILED", check_seconds);
+    if (o.forces)
+      std::printf("  forces: %zu contacts; floor and walls carry %.12g of the weight (%.6g N); %zu unbalanced "
+                  "grains; %lld with a singular support set (carried by a smaller subset); %lld lifted (upward load %.3g "
+                  "of the weight); %lld pushed sideways (largest lateral load %.3g of a grain's weight; left to "
+                  "friction); wrote %s/%s.forces.csv, .forces.vtp\n",
+                  network.contacts.size(), network.container_force.z() / network.total_weight, network.total_weight,
+                  network.unbalanced.size(), static_cast<long long>(network.singular_grains),
+                  static_cast<long long>(network.lifted_grains),
+                  network.lifted_force / network.total_weight, static_cast<long long>(network.lateral_grains),
+                  network.largest_lateral, o.out.c_str(), name.c_str());
     std::printf("  wrote %s/%s.csv, .json, .vtp in %.3f s; %.3f s in all\n", o.out.c_str(), name.c_str(),
                 write_seconds, seconds_since(t_start));
   }
@@ -183,6 +218,9 @@ Runner add_deposit_command(CLI::App& app) {
                 "self-check the packing (overlaps, unsupported grains, grains outside the container); "
                 "the files are still written, and the exit code is 4 if anything is wrong");
   cmd->add_flag("-q,--quiet", o->quiet, "no progress bar and no summary; only errors");
+  cmd->add_flag("--forces", o->forces,
+                "also write the static normal-force network: NAME.forces.csv (i,j,fx,fy,fz: force on grain i "
+                "from j; j = 0 the floor, j < 0 a wall) and NAME.forces.vtp (force chains, lines coloured by |f|)");
   cmd->add_option("--name", o->name, "base name of the output files (default: the scene name)");
   return [o, cmd]() { return run(*o, *cmd); };
 }

@@ -29,6 +29,9 @@ Runner add_export_command(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
 
+  cmd->add_flag("--preload", o->settings.preload,
+                "write the pre-loaded packing (as btr relax --preload does)");
+
   return [o, cmd]() -> int {
     try {
       PackingWithScene p = load_packing_with_scene(o->packing);

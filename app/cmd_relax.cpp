@@ -66,6 +66,9 @@ Runner add_relax_command(CLI::App& app) {
                   "refuse packings whose largest overlap / smaller radius exceeds this")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--preload", o->settings.preload,
+                "pre-loaded start: give each contact the overlap that carries its static force (also on when "
+                "the scene sets [relax] preload = true); writes OUTDIR/preloaded.* and preloaded.forces.*");
   cmd->add_option("--time-limit", o->settings.wall_time_limit, "wall-time limit of the engine run [s]")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);

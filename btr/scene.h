@@ -60,6 +60,7 @@ struct RelaxSpec {
   double stop_kinetic_ratio = 1e-6; // stop when kinetic energy < ratio * sum_i m_i g d_i
   double timestep_fraction = 0.2;   // of the Rayleigh / contact time
   std::optional<double> timestep;   // requested step; refused if above the stable one
+  bool preload = false;             // start from the pre-loaded packing (coupling/preload.h)
   // Which rule ends the relaxation (besides max_time): "kinetic-energy" (E < stop_kinetic_ratio sum m g d),
   // "unbalanced-force" (YADE's utils.unbalancedForce() < stop_unbalanced_force) or "displacement" (the
   // largest grain displacement over the last check window < stop_displacement * smallest diameter).

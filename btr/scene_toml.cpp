@@ -160,7 +160,8 @@ class SceneParser {
     auto s = rd_.table(root_, "relax", "[relax]");
     if (!s) return;
     rd_.check_keys(*s, {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep", "stop_rule",
-                        "stop_unbalanced_force", "stop_displacement", "damping", "open_margin", "target_phi"});
+                        "stop_unbalanced_force", "stop_displacement", "damping", "open_margin", "preload",
+                        "target_phi"});
     RelaxSpec& r = scene_.relax;
     r.engine = rd_.choice(*s, "engine", {"liggghts", "yade"}).value_or(r.engine);
     r.model = rd_.choice(*s, "model", {"hertz", "hooke"}).value_or(r.model);
@@ -170,6 +171,7 @@ class SceneParser {
     r.timestep_fraction = rd_.number_or(*s, "timestep_fraction", r.timestep_fraction,
                                         [](double v) { return v > 0.0 && v <= 1.0; }, "a fraction in (0, 1]");
     if (auto t = rd_.number(*s, "timestep", positive, "a positive time step [s]")) r.timestep = *t;
+    r.preload = rd_.boolean_or(*s, "preload", r.preload);
     r.stop_rule = rd_.choice(*s, "stop_rule", {"kinetic-energy", "unbalanced-force", "displacement"}).value_or(r.stop_rule);
     r.stop_unbalanced_force = rd_.number_or(*s, "stop_unbalanced_force", r.stop_unbalanced_force,
                                             [](double v) { return v > 0.0 && v < 1.0; },

@@ -91,6 +91,12 @@ class Reader {
     if (!std::isfinite(v) || !ok(v)) bad_value(s, key, *n, expect);
     return v;
   }
+  bool boolean_or(const Section& s, const std::string& key, bool def) const {
+    auto n = get(s, key);
+    if (!n) return def;
+    if (auto b = n->as_boolean()) return b->get();
+    bad_value(s, key, *n, "true or false");
+  }
   double number_or(const Section& s, const std::string& key, double def, const std::function<bool(double)>& ok,
                    const std::string& expect) const {
     return number(s, key, ok, expect).value_or(def);

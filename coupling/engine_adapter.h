@@ -17,6 +17,8 @@ struct RelaxPlan {
   double max_time = 0.0;        // simulated seconds
   double kinetic_threshold = 0.0;  // J: stop when the total kinetic energy falls below this
   double largest_overlap = 0.0;    // of the input packing, relative to the smaller radius
+                                   // (pre-loaded: beyond the intended overlap)
+  double arming_time = 0.0;        // s; 0: stop_arming_time(grains) (a pre-loaded start arms sooner)
   std::string stop_rule = "kinetic-energy";  // scene relax.stop_rule
   double unbalanced_threshold = 1e-3;        // unbalanced-force: stop below this ratio
   double displacement_threshold = 0.0;       // displacement: stop below this largest displacement per window [m]

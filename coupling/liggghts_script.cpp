@@ -221,7 +221,7 @@ LiggghtsSchedule liggghts_schedule(const Grains& grains, const Scene& scene, con
   s.steps_per_check = window;
   s.average_every = window / kAveragedSamples;
   s.max_checks = std::max(1L, (total + window - 1) / window);
-  s.arming_time = stop_arming_time(grains);
+  s.arming_time = plan.arming_time > 0.0 ? plan.arming_time : stop_arming_time(grains);
   s.blowup_bound = kinetic_energy_bound(grains, scene);
   return s;
 }

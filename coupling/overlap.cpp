@@ -98,7 +98,8 @@ std::string OverlapReport::describe() const {
   if (count == 0) return "no overlap";
   std::string who = id_b == 0 ? "grain " + std::to_string(id_a) + " and the " + wall + " wall"
                               : "grains " + std::to_string(id_a) + " and " + std::to_string(id_b);
-  return fmt(largest) + " of the smaller radius (" + fmt(depth) + " m) between " + who;
+  return fmt(largest) + " of the smaller radius (" + fmt(depth) + " m" +
+         (beyond_intended ? " beyond its intended overlap" : "") + ") between " + who;
 }
 
 void for_each_overlap(const Grains& grains, int dimension, const Container& container,
@@ -121,9 +122,25 @@ void for_each_overlap(const Grains& grains, int dimension, const Container& cont
 }
 
 OverlapReport largest_overlap(const Grains& grains, int dimension, const Container& container) {
+  return largest_overlap(grains, dimension, container, IntendedOverlaps{});
+}
+
+OverlapReport largest_overlap(const Grains& grains, int dimension, const Container& container,
+                              const IntendedOverlaps& intended) {
   OverlapReport rep;
-  for_each_overlap(grains, dimension, container, [&](std::int64_t a, std::int64_t b, double depth, const DemWall* w) {
+  rep.beyond_intended = !intended.empty();
+  const std::vector<DemWall> walls = dem_walls(container, dimension);
+  for_each_overlap(grains, dimension, container, [&](std::int64_t a, std::int64_t b, double overlap, const DemWall* w) {
     ++rep.count;
+    double depth = overlap;
+    if (!intended.empty()) {
+      std::int64_t code = b;
+      if (w)
+        for (std::size_t k = 0; k < walls.size(); ++k)
+          if (walls[k].name == w->name) code = -static_cast<std::int64_t>(k);
+      auto it = intended.find({a, code});
+      if (it != intended.end()) depth -= it->second;
+    }
     const double r = b == 0 ? grains[a - 1].r : std::min(grains[a - 1].r, grains[b - 1].r);
     const double rel = depth / r;
     if (rel > rep.largest) {

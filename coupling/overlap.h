@@ -4,6 +4,8 @@
 // round-off comes from elsewhere (an edited packing, a relaxation) and is measured here.
 #include <cstdint>
 #include <functional>
+#include <map>
+#include <utility>
 #include <string>
 
 #include "btr/container.h"
@@ -19,6 +21,7 @@ struct OverlapReport {
   std::int64_t id_b = 0;
   std::string wall;            // the wall's name when id_b == 0
   std::int64_t count = 0;      // contacts with a positive overlap
+  bool beyond_intended = false;  // largest/depth measure the overlap beyond the intended one
   std::string describe() const;  // "0.031 of the smaller radius (1.5e-05 m) between grains 4 and 17"
 };
 
@@ -28,5 +31,14 @@ void for_each_overlap(const Grains& grains, int dimension, const Container& cont
                       const std::function<void(std::int64_t, std::int64_t, double, const DemWall*)>& f);
 
 OverlapReport largest_overlap(const Grains& grains, int dimension, const Container& container);
+
+// The overlaps a packing is meant to have (a pre-loaded start, preload.h), by contact: (id_a, id_b)
+// with id_a < id_b for a grain pair, (id, code) for a wall with code 0 the floor and -1, -2, ... the
+// other walls in dem_walls order. A contact not listed is meant to have none.
+using IntendedOverlaps = std::map<std::pair<std::int64_t, std::int64_t>, double>;
+
+// The largest overlap beyond its intended value: largest = (overlap - intended) / smaller radius.
+OverlapReport largest_overlap(const Grains& grains, int dimension, const Container& container,
+                              const IntendedOverlaps& intended);
 
 }  // namespace btr

@@ -11,8 +11,10 @@
 
 #include "coupling/dem_walls.h"
 #include "coupling/engine_adapter.h"
+#include "coupling/force_io.h"
 #include "coupling/materials.h"
 #include "coupling/overlap.h"
+#include "coupling/preload.h"
 #include "coupling/process.h"
 #include "coupling/relax_plan.h"
 #include "coupling/text_file.h"
@@ -112,8 +114,50 @@ double kinetic_energy_bound(const Grains& grains, const Scene& scene) {
   return 2.0 * energy;
 }
 
+double preload_arming_time(double largest_intended_depth, double timestep) {
+  return std::max(std::sqrt(2.0 * largest_intended_depth / kGravity), 50.0 * timestep);
+}
+
+Packing starting_packing(const Packing& packing, const Scene& scene, const RelaxSettings& settings,
+                         IntendedOverlaps& intended, const std::string& out_dir) {
+  intended.clear();
+  if (!settings.preload && !scene.relax.preload) return packing;
+  check_inputs(packing, scene);
+  Preloaded p;
+  try {
+    p = preload_packing(packing.grains, scene);
+  } catch (const std::runtime_error& e) {
+    throw RelaxRefused(e.what());
+  }
+  Packing out;
+  out.grains = std::move(p.grains);
+  out.meta = packing.meta.is_object() ? packing.meta : nlohmann::json::object();
+  double lateral = 0.0;
+  for (const UnbalancedGrain& u : p.forces.unbalanced) lateral = std::max(lateral, u.residual.norm() / u.load);
+  out.meta["preload"] = {{"model", scene.relax.model},
+                         {"contacts", p.forces.contacts.size()},
+                         {"largest_intended_overlap", p.largest_relative},
+                         {"largest_intended_depth", p.largest_depth},
+                         {"largest_move", p.largest_move},
+                         {"largest_misfit", p.largest_misfit},
+                         {"rms_misfit", p.rms_misfit},
+                         {"unbalanced_grains", p.forces.unbalanced.size()},
+                         {"largest_unbalanced_fraction", lateral}};
+  intended = std::move(p.intended);
+  std::cout << "pre-load (" << scene.relax.model << "): " << p.forces.contacts.size()
+            << " contacts, largest intended overlap " << g6(p.largest_relative) << " of the smaller radius ("
+            << g6(p.largest_depth) << " m), grains lowered by up to " << g6(p.largest_move)
+            << " m, overlap misfit against the law rms " << g6(p.rms_misfit) << " m (largest " << g6(p.largest_misfit)
+            << " of a radius); "
+            << p.forces.unbalanced.size() << " grains with a lateral load their supports do not carry (largest "
+            << g6(lateral) << " of the load; left to friction)\n";
+  write_packing(out_dir, "preloaded", out);
+  write_forces(out_dir, "preloaded", packing.grains, p.forces);
+  return out;
+}
+
 RelaxPlan make_plan(const Packing& packing, const Scene& scene, const RelaxSettings& settings,
-                    const std::string& engine) {
+                    const std::string& engine, const IntendedOverlaps* intended) {
   check_inputs(packing, scene);
   RelaxPlan plan;
   const StableStep stable = stable_timestep(packing.grains, scene,
@@ -131,13 +175,20 @@ RelaxPlan make_plan(const Packing& packing, const Scene& scene, const RelaxSetti
     plan.timestep_rule = stable.rule;
   }
   if (!(settings.max_overlap >= 0.0)) throw RelaxRefused("max_overlap must be >= 0, got " + g6(settings.max_overlap));
-  const OverlapReport overlap = largest_overlap(packing.grains, scene.dimension, scene.container);
+  const OverlapReport overlap = intended ? largest_overlap(packing.grains, scene.dimension, scene.container, *intended)
+                                         : largest_overlap(packing.grains, scene.dimension, scene.container);
   if (overlap.largest > settings.max_overlap)
     throw RelaxRefused("packing refused: its largest overlap, " + overlap.describe() + ", exceeds the limit " +
                        g6(settings.max_overlap) + " (" + std::to_string(overlap.count) +
-                       " overlapping contacts in all); BTR contacts touch exactly, so this packing was changed "
-                       "or is not a BTR packing");
+                       " overlapping contacts in all); " +
+                       (intended ? "a pre-loaded packing may overlap only as its contact forces require"
+                                 : "BTR contacts touch exactly, so this packing was changed or is not a BTR packing"));
   plan.largest_overlap = overlap.largest;
+  if (intended) {
+    double deepest = 0.0;
+    for (const auto& [key, depth] : *intended) deepest = std::max(deepest, depth);
+    plan.arming_time = preload_arming_time(deepest, plan.timestep);
+  }
   plan.max_time = scene.relax.max_time;
   plan.kinetic_threshold = kinetic_threshold(packing.grains, scene);
   plan.stop_rule = scene.relax.stop_rule;
@@ -375,16 +426,20 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
 std::vector<std::string> export_inputs(const Packing& packing, const Scene& scene, const std::string& engine,
                                        const RelaxSettings& settings, const std::string& dir) {
   const auto adapter = make_adapter(engine);
-  const RelaxPlan plan = make_plan(packing, scene, settings, engine);
-  return write_engine_inputs(packing, scene, *adapter, settings, plan, dir);
+  IntendedOverlaps intended;
+  const Packing start = starting_packing(packing, scene, settings, intended, dir);
+  const RelaxPlan plan = make_plan(start, scene, settings, engine, intended.empty() ? nullptr : &intended);
+  return write_engine_inputs(start, scene, *adapter, settings, plan, dir);
 }
 
 RelaxResult relax(const Packing& packing, const Scene& scene, const std::string& engine,
                   const RelaxSettings& settings, const std::string& out_dir) {
   const auto adapter = make_adapter(engine);
-  const RelaxPlan plan = make_plan(packing, scene, settings, engine);
-  write_engine_inputs(packing, scene, *adapter, settings, plan, out_dir);
-  return run_engine_inputs(packing, scene, *adapter, engine, settings, plan, out_dir);
+  IntendedOverlaps intended;
+  const Packing start = starting_packing(packing, scene, settings, intended, out_dir);
+  const RelaxPlan plan = make_plan(start, scene, settings, engine, intended.empty() ? nullptr : &intended);
+  write_engine_inputs(start, scene, *adapter, settings, plan, out_dir);
+  return run_engine_inputs(start, scene, *adapter, engine, settings, plan, out_dir);
 }
 
 }  // namespace btr

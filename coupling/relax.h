@@ -17,6 +17,8 @@ struct RelaxSettings {
   double wall_time_limit = 3600.0;  // s; the engine is killed past this
   std::optional<double> timestep;   // overrides the computed stable step (refused if above it)
   double max_overlap = 0.05;        // refuse packings whose largest overlap / smaller radius exceeds this
+                                    // (with a pre-load: the overlap beyond the intended one)
+  bool preload = false;             // pre-loaded start (preload.h); also on when the scene sets relax.preload
   std::optional<double> damping;    // overrides the scene's relax.damping
 };
 

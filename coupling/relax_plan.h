@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "coupling/engine_adapter.h"
+#include "coupling/overlap.h"
 #include "coupling/relax.h"
 
 namespace btr {
@@ -23,8 +24,21 @@ std::unique_ptr<EngineAdapter> make_adapter(const std::string& engine);
 // largest initial overlap. Throws RelaxRefused for a requested step above the stable one or an
 // overlap above settings.max_overlap, each with the number that would be accepted.
 // `engine` ("liggghts" | "yade") decides which contact mode's damping limits the step (timestep.h).
+// With `intended` (a pre-loaded packing, preload.h) the overlap checked is the one beyond each
+// contact's intended overlap, and the stop rule arms after preload_arming_time.
 RelaxPlan make_plan(const Packing& packing, const Scene& scene, const RelaxSettings& settings,
-                    const std::string& engine);
+                    const std::string& engine, const IntendedOverlaps* intended = nullptr);
+
+// Arming time of a pre-loaded start: sqrt(2 delta_max / g), the time a grain whose weight were not
+// carried takes to fall through the largest intended overlap (its kinetic energy m g delta_max is then
+// far above the threshold, ~1e-6 m g d), and at least 50 time steps.
+double preload_arming_time(double largest_intended_depth, double timestep);
+
+// The packing a relaxation starts from: the input, or its pre-loaded version when settings.preload or
+// the scene's relax.preload asks for it (then `intended` is filled and the preloaded packing with its
+// force network is written to out_dir/preloaded.{csv,json,vtp} and preloaded.forces.{csv,vtp}).
+Packing starting_packing(const Packing& packing, const Scene& scene, const RelaxSettings& settings,
+                         IntendedOverlaps& intended, const std::string& out_dir);
 
 // The stop rule's threshold: ratio * sum_i m_i g d_i (d_i the diameter, m_i a sphere's mass).
 double kinetic_threshold(const Grains& grains, const Scene& scene);

@@ -57,12 +57,16 @@ TargetPhiResult relax_to_target_phi(const Packing& packing, const Scene& scene, 
               << " (" << r.stop_reason << ", " << r.wall_seconds << " s)\n";
   };
   const double phi0 = bulk_packing_fraction(packing.grains, scene, margin);
+  // A pre-loaded start (preload.h) needs BTR's supports: only the first run starts from the BTR packing.
+  RelaxSettings later = settings;
+  Scene settle_scene = scene;
   if (std::isnan(phi0)) throw RelaxRefused("target packing fraction: the packing has no bulk window to measure");
   if (!(phi0 >= target_phi)) {
     for (std::size_t k = 0; k < schedule.size() && !out.reached; ++k) {
-      Scene stage = with_friction_scaled(scene, schedule[k]);
+      Scene stage = with_friction_scaled(settle_scene, schedule[k]);
       stage.relax.stop_kinetic_ratio *= kStageKineticLoosening;
-      RelaxResult r = relax(current, stage, engine, settings, out_dir + "/friction_" + std::to_string(k + 1));
+      RelaxResult r = relax(current, stage, engine, later, out_dir + "/friction_" + std::to_string(k + 1));
+      later.preload = false, settle_scene.relax.preload = false;
       record(schedule[k], r);
       current.grains = r.relaxed.grains;
       if (!r.removed.empty())
@@ -73,7 +77,7 @@ TargetPhiResult relax_to_target_phi(const Packing& packing, const Scene& scene, 
   } else {
     out.reached = true;  // already at or above the target: only the settle
   }
-  out.settled = relax(current, scene, engine, settings, out_dir);
+  out.settled = relax(current, settle_scene, engine, later, out_dir);
   record(1.0, out.settled);
   nlohmann::json stages = nlohmann::json::array();
   for (const TargetPhiStage& s : out.stages)

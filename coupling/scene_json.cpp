@@ -220,6 +220,7 @@ json scene_core_to_json(const Scene& s) {
         {"stop_displacement", s.relax.stop_displacement},
         {"damping", s.relax.damping},
         {"open_margin", s.relax.open_margin},
+        {"preload", s.relax.preload},
         {"target_phi", s.relax.target_phi ? json(*s.relax.target_phi) : json(nullptr)}}},
   };
 }
@@ -292,7 +293,8 @@ Scene scene_from_json(const json& j, const std::string& origin) {
 
   const json& r = rd.object(j, "", "relax",
                             {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep",
-                             "stop_rule", "stop_unbalanced_force", "stop_displacement", "damping", "open_margin", "target_phi"});
+                             "stop_rule", "stop_unbalanced_force", "stop_displacement", "damping", "open_margin", "preload",
+                             "target_phi"});
   s.relax.engine = rd.string(r, "relax", "engine");
   s.relax.model = rd.string(r, "relax", "model");
   s.relax.max_time = rd.number(r, "relax", "max_time");
@@ -302,6 +304,10 @@ Scene scene_from_json(const json& j, const std::string& origin) {
   if (ts.is_null()) s.relax.timestep.reset();
   else if (ts.is_number()) s.relax.timestep = ts.get<double>();
   else rd.fail("relax.timestep", "expected a number or null, got " + ts.dump());
+  if (r.contains("preload")) {  // absent in packings written before the option existed
+    if (!r["preload"].is_boolean()) rd.fail("relax.preload", "expected true or false, got " + r["preload"].dump());
+    s.relax.preload = r["preload"].get<bool>();
+  }
   // Keys added later: packings written before them have none and take the defaults.
   if (r.contains("stop_rule")) s.relax.stop_rule = rd.string(r, "relax", "stop_rule");
   if (r.contains("stop_unbalanced_force")) s.relax.stop_unbalanced_force = rd.number(r, "relax", "stop_unbalanced_force");

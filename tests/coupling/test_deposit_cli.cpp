@@ -5,7 +5,10 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <cmath>
+#include <cstdio>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include "coupling/packing_io.h"
@@ -116,6 +119,47 @@ TEST(DepositCli, ExitCodes) {
   r = btr("deposit " + kHeap + " -o " + (file / "sub").string() + " --count 20");
   EXPECT_EQ(r.code, 3);
   EXPECT_NE(r.err.find("plain_file"), std::string::npos) << r.err;
+}
+
+// --forces: NAME.forces.csv beside the packing (header i,j,fx,fy,fz; %.17g, so the rows are exact),
+// the floor carrying the weight computed independently from the packing's radii and the scene's
+// density, byte-identical across runs, and the .vtp with one line per contact.
+TEST(DepositCli, ForcesFileBalancesTheWeight) {
+  const fs::path dir = scratch() / "forces";
+  const std::string bed = std::string(BTR_SOURCE_DIR) + "/inputs/bed3d.toml";
+  const CliRun r = btr("deposit " + bed + " -o " + dir.string() + " --count 500 --forces");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("forces: "), std::string::npos) << r.out;
+  const Packing p = read_packing((dir / "bed3d.csv").string());
+  double weight = 0.0;
+  for (const Grain& g : p.grains) weight += 4.0 / 3.0 * M_PI * g.r * g.r * g.r * 2500.0 * 9.81;
+  std::ifstream in(dir / "bed3d.forces.csv");
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "i,j,fx,fy,fz");
+  double floor = 0.0;
+  std::size_t rows = 0;
+  std::set<std::pair<long, long>> seen;
+  while (std::getline(in, line)) {
+    long i = 0, j = 0;
+    double f[3];
+    ASSERT_EQ(std::sscanf(line.c_str(), "%ld,%ld,%lf,%lf,%lf", &i, &j, f, f + 1, f + 2), 5) << line;
+    EXPECT_GE(i, 1);
+    EXPECT_LE(i, 500);
+    EXPECT_LT(j, i);
+    EXPECT_GE(j, 0);  // a periodic bed has a floor and no side walls
+    EXPECT_TRUE(seen.insert({i, j}).second) << "contact listed twice: " << line;
+    if (j == 0) floor += f[2];
+    ++rows;
+  }
+  EXPECT_GT(rows, 500u);
+  // The floor carries the weight, plus the small upward load of "lifted" grains (force_network.h).
+  EXPECT_GE(floor, weight * (1 - 1e-9));
+  EXPECT_LT(floor, weight * 1.1);
+  const std::string vtp = slurp(dir / "bed3d.forces.vtp");
+  EXPECT_NE(vtp.find("NumberOfLines=\"" + std::to_string(rows) + "\""), std::string::npos);
+  ASSERT_EQ(btr("deposit " + bed + " -o " + dir.string() + " --count 500 --forces --name again -q").code, 0);
+  EXPECT_EQ(slurp(dir / "bed3d.forces.csv"), slurp(dir / "again.forces.csv"));
 }
 
 TEST(MeasureCli, SameMeasuresAsTheDepositAndNamedOptions) {
