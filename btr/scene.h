@@ -70,6 +70,9 @@ struct RelaxSpec {
   double damping = 0.0;             // YADE's NewtonIntegrator damping (local, non-viscous), in [0, 1); 0 = off
   double open_margin = 10.0;        // open container: grains farther than this many largest diameters
                                     // beyond the packing's footprint are removed (and counted)
+  // Land on this bulk packing fraction: relax with friction scaled down until it is reached, then restore
+  // the friction and settle (coupling/relax_target.h). Unset: one relaxation at the scene's friction.
+  std::optional<double> target_phi;
 };
 
 // A single larger grain dropped first, so it sits on the floor under the bed (Brazil nut).

@@ -160,7 +160,8 @@ class SceneParser {
     auto s = rd_.table(root_, "relax", "[relax]");
     if (!s) return;
     rd_.check_keys(*s, {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep", "stop_rule",
-                        "stop_unbalanced_force", "stop_displacement", "damping", "open_margin", "preload"});
+                        "stop_unbalanced_force", "stop_displacement", "damping", "open_margin", "preload",
+                        "target_phi"});
     RelaxSpec& r = scene_.relax;
     r.engine = rd_.choice(*s, "engine", {"liggghts", "yade"}).value_or(r.engine);
     r.model = rd_.choice(*s, "model", {"hertz", "hooke"}).value_or(r.model);
@@ -182,6 +183,9 @@ class SceneParser {
                               "a damping coefficient in [0, 1) (YADE's NewtonIntegrator damping; 0 = off)");
     r.open_margin = rd_.number_or(*s, "open_margin", r.open_margin, positive,
                                   "a positive number of largest grain diameters");
+    if (auto t = rd_.number(*s, "target_phi", [](double v) { return v > 0.0 && v < 1.0; },
+                            "a target bulk packing fraction in (0, 1)"))
+      r.target_phi = *t;
   }
 
   RadiusSpec parse_radius(const Section& s) {

@@ -223,7 +223,8 @@ json scene_core_to_json(const Scene& s) {
         {"stop_displacement", s.relax.stop_displacement},
         {"damping", s.relax.damping},
         {"open_margin", s.relax.open_margin},
-        {"preload", s.relax.preload}}},
+        {"preload", s.relax.preload},
+        {"target_phi", s.relax.target_phi ? json(*s.relax.target_phi) : json(nullptr)}}},
   };
 }
 
@@ -302,7 +303,8 @@ Scene scene_from_json(const json& j, const std::string& origin) {
 
   const json& r = rd.object(j, "", "relax",
                             {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep",
-                             "stop_rule", "stop_unbalanced_force", "stop_displacement", "damping", "open_margin", "preload"});
+                             "stop_rule", "stop_unbalanced_force", "stop_displacement", "damping", "open_margin", "preload",
+                             "target_phi"});
   s.relax.engine = rd.string(r, "relax", "engine");
   s.relax.model = rd.string(r, "relax", "model");
   s.relax.max_time = rd.number(r, "relax", "max_time");
@@ -322,6 +324,7 @@ Scene scene_from_json(const json& j, const std::string& origin) {
   if (r.contains("stop_displacement")) s.relax.stop_displacement = rd.number(r, "relax", "stop_displacement");
   if (r.contains("damping")) s.relax.damping = rd.number(r, "relax", "damping");
   if (r.contains("open_margin")) s.relax.open_margin = rd.number(r, "relax", "open_margin");
+  if (r.contains("target_phi") && !r["target_phi"].is_null()) s.relax.target_phi = rd.number(r, "relax", "target_phi");
   if (j.contains("intruder")) {
     const json& in = rd.object(j, "", "intruder", {"diameter_ratio", "x", "y", "species"});
     IntruderSpec spec;

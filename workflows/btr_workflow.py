@@ -21,6 +21,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from btrdem.io import InputError  # noqa: E402
 from btrdem.runner import REPO, StepFailed  # noqa: E402
+from btrdem.error_runtime import METHODS as METHODS_DEFAULT  # noqa: E402
 
 DEFAULT_SCENE = REPO / "inputs" / "bed3d.toml"
 
@@ -36,7 +37,19 @@ def floats(text: str) -> list:
         raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
 
 
+def ints(text: str) -> list:
+    try:
+        out = [int(x) for x in text.split(",") if x]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated grain counts, got {text!r}") from None
+    if not out or min(out) <= 0:
+        raise argparse.ArgumentTypeError(f"expected positive grain counts, got {text!r}")
+    return out
+
+
 def pour_variants(text: str) -> list:
+    if text.strip() in ("", "none"):
+        return []
     out = []
     for item in text.split(","):
         try:
@@ -88,6 +101,19 @@ def main(argv=None) -> int:
     e.add_argument("--pours", type=pour_variants, help="shorter pours PACE:STOP,... e.g. 0.25:1e-3,0.5:1e-4,1:1e-6")
     e.add_argument("--np", type=int, default=1)
     e.add_argument("--margin", type=float, help=margin_help)
+    e.add_argument("--counts", type=ints, help="size study: the same table at each grain count, e.g. 3000,10000,30000, "
+                                               "into OUT/n<N>/ with OUT/size_study.{md,json,png}")
+    e.add_argument("--methods", default=",".join(METHODS_DEFAULT),
+                   help="BTR-based methods besides BTR alone: some of " + ",".join(METHODS_DEFAULT))
+    e.add_argument("--damping", type=float, default=0.5, help="damping of the damped method (default 0.5)")
+    e.add_argument("--target-phi", default="pour",
+                   help="target of the target-phi method: 'pour' (the reference pours' mean) or a number")
+    e.add_argument("--friction-scales", type=floats,
+                   help="target-phi method: friction scales tried in turn (default btr relax's 0.5,0.25,...,0)")
+    e.add_argument("--shakes", type=int, default=10, help="btr shake cycles of the shake method (default 10)")
+    e.add_argument("--reuse-pours", action="store_true",
+                   help="reuse pours already finished in the output folder with the same settings and grains "
+                        "(their recorded wall times)")
 
     s = sub.add_parser("stability", help="stiff and extreme cases run to rest; stable-step margin by bisection")
     s.add_argument("-o", "--out", help="output folder (default out/stability)")
@@ -140,9 +166,23 @@ def main(argv=None) -> int:
             from btrdem.pipeline import run_pipeline
             run_pipeline(args.scene, args.out, args.engine, args.np, args.seed, args.count, progress)
         elif args.command == "error-vs-runtime":
-            from btrdem.error_runtime import run_error_vs_runtime
-            run_error_vs_runtime(args.scene, args.out, args.engine, args.ref_seeds, args.count, args.relax_times,
-                                 args.pours, args.np, args.margin, progress)
+            from btrdem.error_runtime import run_error_vs_runtime, run_size_study
+            if args.target_phi != "pour":
+                try:
+                    if not 0.0 < float(args.target_phi) < 1.0:
+                        raise ValueError
+                except ValueError:
+                    raise InputError(f"--target-phi: expected 'pour' or a packing fraction in (0, 1), "
+                                     f"got {args.target_phi!r}") from None
+            kw = dict(engine=args.engine, ref_seeds=args.ref_seeds, relax_times=args.relax_times,
+                      pour_variants=args.pours, ranks=args.np, margin=args.margin, progress=progress,
+                      methods=[m for m in args.methods.split(",") if m], damping=args.damping,
+                      target_phi=args.target_phi, shakes=args.shakes, reuse_pours=args.reuse_pours,
+                      friction_scales=args.friction_scales)
+            if args.counts:
+                run_size_study(args.scene, args.counts, args.out, **kw)
+            else:
+                run_error_vs_runtime(args.scene, args.out, count=args.count, **kw)
         elif args.command == "stability":
             from btrdem.stability import run_stability
             engines = [x for x in args.engines.split(",") if x]

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -13,8 +14,17 @@
 #include "btr/scene.h"
 #include "coupling/packing_io.h"
 #include "coupling/scene_json.h"
+#include "coupling/yade_script.h"
 
 namespace btr_test {
+
+// Is the engine ("liggghts" or "yade") installed? (the engine tests skip, with the reason, when not)
+inline bool have_engine(const std::string& engine) {
+  const std::string probe = engine == "liggghts"
+                                ? "command -v liggghts >/dev/null 2>&1"
+                                : std::string("test -d ") + btr::kYadePythonPath + "/yade";
+  return std::system(probe.c_str()) == 0;
+}
 
 // splitmix64, mapped to [0, 1) by hand (std distributions are implementation-defined).
 class Rng {

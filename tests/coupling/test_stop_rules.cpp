@@ -13,22 +13,12 @@
 #include "coupling/timestep.h"
 #include "coupling/yade_script.h"
 #include "relax_fixtures.h"
+#include "relaxation_checks.h"
 
 namespace {
 
-bool have_engine(const std::string& engine) {
-  const std::string probe = engine == "liggghts"
-                                ? "command -v liggghts >/dev/null 2>&1"
-                                : std::string("test -d ") + btr::kYadePythonPath + "/yade";
-  return std::system(probe.c_str()) == 0;
-}
-
-std::string read(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
+using btr_test::have_engine;
+std::string read(const std::string& path) { return btr_test::read_text(path); }
 
 nlohmann::json relaxed_meta(const std::string& dir) { return nlohmann::json::parse(read(dir + "/relaxed.json")); }
 

@@ -30,7 +30,7 @@ def test_error_vs_runtime_tiny(tmp_path, source_dir, btr_binary, liggghts):
     scene = tiny_bed_toml(tmp_path / "evr.toml", count=150, max_time=0.04)
     out = tmp_path / "evr"
     p = run(["error-vs-runtime", scene, "-o", str(out), "--relax-times", "0.005,0.04", "--pours", "0.3:1e-3,1:1e-5",
-             "--margin", "2"], source_dir)
+             "--margin", "2", "--methods", "relax"], source_dir)
     assert p.returncode == 0, p.stdout + p.stderr
     res = json.loads((out / "error_vs_runtime.json").read_text())
     assert res["reference"]["seeds"] == [1, 2, 3]
@@ -70,7 +70,7 @@ def test_error_vs_runtime_keeps_going_when_a_method_fails(tmp_path, btr_binary, 
     scene = tiny_bed_toml(tmp_path / "evr.toml", count=150, max_time=0.04)
     out = tmp_path / "evr"
     res = error_runtime.run_error_vs_runtime(scene, out, relax_times=[0.005, 0.04], pour_variants=[(1.0, 1e-5)],
-                                             margin=2.0, progress=lambda m: None)
+                                             margin=2.0, progress=lambda m: None, methods=("relax",))
     rows = {r["method"]: r for r in res["rows"]}
     assert list(rows) == ["BTR", "BTR + liggghts relax 0.005 s", "BTR + liggghts relax 0.04 s",
                           "DEM pour pace 1 stop 1e-05"]
@@ -88,3 +88,49 @@ def test_error_vs_runtime_keeps_going_when_a_method_fails(tmp_path, btr_binary, 
     run_json = json.loads((out / "run.json").read_text())
     steps = {s["name"]: s for s in run_json["steps"]}
     assert run_json["status"] == "ok" and steps["BTR + liggghts relax 0.005 s"]["status"] == "failed"
+
+
+def test_size_study_new_methods_failed_count_and_reused_pours(tmp_path, btr_binary, liggghts, monkeypatch):
+    """--counts: one table per count; a count whose study fails (0 grains: btr deposit refuses it) is a row
+    with its reason and the study goes on; target phi records its friction stages and lands within reach of the pours' phi or
+    says it did not; pre-loading without --preload in this build is a failed row naming the option; a rerun
+    with reuse_pours takes the finished reference pours and their recorded wall times."""
+    from btrdem import btr_cli, error_runtime
+
+    monkeypatch.setenv("BTR_BINARY", btr_binary)
+    scene = tiny_bed_toml(tmp_path / "evr.toml", count=150, max_time=0.04)
+    out = tmp_path / "sizes"
+    error_runtime.run_size_study(scene, [0, 150], out, relax_times=[], pour_variants=[], margin=2.0,
+                                 progress=lambda m: None, methods=("target-phi", "shake", "preload"), shakes=3)
+    study = json.loads((out / "size_study.json").read_text())
+    assert [s["count"] for s in study["sizes"]] == [0, 150]
+    small, ok = study["sizes"]
+    assert small["status"] == "fail" and "deposit" in small["reason"], small
+    assert ok["status"] == "ok" and ok["grains"] == 150, ok
+    rows = {m["kind"]: m for m in ok["methods"]}
+    assert set(rows) == {"btr", "target", "shake", "preload"}
+    has_preload = "--preload" in btr_cli.help_text(btr_binary, "relax")
+    if not has_preload:
+        assert rows["preload"]["status"] == "fail" and "--preload" in rows["preload"]["reason"]
+    for kind in ("btr", "target", "shake"):
+        assert rows[kind]["status"] == "ok", rows[kind]
+        assert rows[kind]["cost_ratio"] == pytest.approx(rows[kind]["wall_seconds"] / ok["reference_pour_wall_seconds"])
+    res = json.loads((out / "n150" / "error_vs_runtime.json").read_text())
+    target = next(r for r in res["rows"] if r["kind"] == "target")
+    stages = target["target_phi_stages"]
+    assert stages["target"] == pytest.approx(res["reference"]["mean"]["packing_fraction"])
+    assert stages["stages"][-1]["friction_scale"] == 1.0
+    scales = [s["friction_scale"] for s in stages["stages"][:-1]]
+    assert scales == sorted(scales, reverse=True) and all(s < 1 for s in scales)
+    if stages["reached"]:  # the last reduced-friction stage reached the target, the ones before did not
+        assert stages["stages"][-2]["bulk_packing_fraction"] >= stages["target"]
+    assert all(s["bulk_packing_fraction"] < stages["target"] for s in stages["stages"][:-2])
+    md = (out / "size_study.md").read_text()
+    assert "## 0 grains: fail" in md and "## 150 grains" in md
+    assert (out / "size_study.png").read_bytes()[:4] == b"\x89PNG"
+
+    again = error_runtime.run_error_vs_runtime(scene, out / "n150", count=150, relax_times=[], pour_variants=[],
+                                               margin=2.0, progress=lambda m: None, methods=(), reuse_pours=True)
+    assert again["reference"]["reused"] == [True, True, True]
+    assert again["reference"]["wall_seconds"] == res["reference"]["wall_seconds"]
+

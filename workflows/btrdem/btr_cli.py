@@ -3,9 +3,10 @@ from __future__ import annotations
 
 import os
 import shutil
+import subprocess
 from pathlib import Path
 
-from .io import read_json, read_packing, write_json
+from .io import read_json, read_packing, write_json, write_scene_toml
 from .runner import StepFailed, run_command
 
 ENGINES = ("liggghts", "yade")
@@ -35,7 +36,7 @@ def deposit(btr: str, scene_path: str, outdir, name: str = "btr", seed: int | No
 def relax(btr: str, packing_csv: str, engine: str, outdir, np: int = 1, timestep: float | None = None,
           time_limit: float | None = None, progress=print, label: str | None = None, check: bool = True,
           extra_args=()) -> dict:
-    """btr relax PACKING --engine E -o OUTDIR; returns {returncode, wall_seconds, csv, error, ...}.
+    """btr relax PACKING --engine E -o OUTDIR [extra options]; returns {returncode, wall_seconds, csv, error, ...}.
     With check=True a failed run raises StepFailed with the program's message."""
     if engine not in ENGINES:
         raise StepFailed(f"relax: engine: expected one of {', '.join(ENGINES)}, got {engine!r}")
@@ -107,3 +108,38 @@ def scaled_variant(packing_csv: str, outdir, name: str, factor: float, scene_edi
 
     write_packing(outdir, name, p, vtp=False)
     return str(Path(outdir) / f"{name}.csv")
+
+
+def help_text(btr: str, command: str) -> str:
+    """`btr COMMAND --help` (to check that this build has an option)."""
+    p = subprocess.run([btr, command, "--help"], capture_output=True, text=True, timeout=60)
+    return p.stdout + p.stderr
+
+
+def shake(btr: str, scene_path: str, outdir, cycles: int, count: int | None = None, lift_d: float = 1.0,
+          noise_d: float = 0.1, progress=print) -> dict:
+    """`btr shake` of the scene (its grains or `count`) for `cycles` Jullien-Meakin cycles, lifting the pile by
+    lift_d and moving each grain by up to noise_d largest diameters; returns {csv (last cycle), wall_seconds}."""
+    import tomllib
+
+    with open(scene_path, "rb") as f:
+        scene = tomllib.load(f)
+    if count is not None:
+        scene["grains"]["count"] = int(count)
+    rad = scene["grains"].get("radius", {})
+    r_max = max(float(rad.get(k, 0.0)) for k in ("value", "max")) or max(rad.get("values", [0.0]))
+    if not r_max > 0.0:
+        raise StepFailed(f"{scene_path}: shake: no largest radius in [grains].radius")
+    scene["shaking"] = {"cycles": int(cycles), "lift": 2.0 * r_max * lift_d, "noise": 2.0 * r_max * noise_d,
+                        "snapshot_every": int(cycles)}
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    toml = outdir / "shake_scene.toml"
+    write_scene_toml(toml, scene)
+    res = run_command([btr, "shake", str(toml), "-o", str(outdir), "--name", "shaken", "--quiet"], outdir, "shake",
+                      progress=progress)
+    csv = outdir / f"shaken_c{int(cycles):06d}.csv"
+    if res["returncode"] != 0 or not csv.exists():
+        raise StepFailed(f"btr shake exited with status {res['returncode']} (no {csv}): "
+                         f"{Path(res['stderr']).read_text(errors='replace').strip()[-1500:]}")
+    return {"csv": str(csv), "wall_seconds": res["wall_seconds"]}

@@ -7,9 +7,17 @@ standard deviation the error floor. Methods, each with its wall time measured in
   BTR                      btr deposit alone
   BTR + relax T            deposit + `btr relax` capped at T simulated seconds (the scene's kinetic-
                            energy stop rule still applies, so a relaxation may end earlier)
+  BTR + relax damped D      the same with quasi-static damping D (`btr relax --damping D`)
+  BTR + target phi         `btr relax --target-phi X --damping D`, X the reference pours' mean (or a number):
+                           friction scaled down until the bulk packing fraction reaches X, then restored and
+                           settled, every stage with the damped method's damping
+  BTR + K shakes + relax   `btr shake` (K Jullien-Meakin cycles of BTR redeposition) then `btr relax`
+  BTR + pre-loaded relax   `btr relax --preload` (a failed row with the reason where this build has none)
   DEM pour (pace p, stop s)  a pour of another seed, released p times faster than the reference's
                            pace and stopped at kinetic ratio s: shorter pours; the last one is the
                            reference's own settings
+With reuse_pours a pour already finished in its folder with the same settings and grains is reused with
+its recorded wall time (pours dominate the study's cost; the rows say "reused").
 Error of a method in a measure: |value - reference mean| (g(r): RMS difference from the mean
 reference g(r) for r > 0.5 d, in 0.1 d bins). The floor of a measure is the reference seeds' standard
 deviation s; a method reaches the floor when its error is at most 2 s sqrt(1 + 1/n) (n reference
@@ -23,10 +31,12 @@ from pathlib import Path
 import numpy as np
 
 from . import btr_cli, measures, report
-from .io import atomic_write_text, read_packing, write_json
+from .io import atomic_write_text, read_json, read_packing, write_json
 from .pipeline import default_outdir, scene_inputs
-from .pour import PourSettings, pour
+from .pour import PourSettings, finished_pour, pour
 from .runner import RunRecord, StepFailed, find_btr
+
+METHODS = ("relax", "damped", "target-phi", "shake", "preload")
 
 MEASURES = {"packing_fraction": "packing fraction", "coordination": "mean coordination", "rdf": "g(r) RMS",
             "angle_of_repose": "angle of repose [deg]", "segregation": "segregation index"}
@@ -76,7 +86,9 @@ def errors_of(m: dict, mean: dict, names: list) -> dict:
 
 def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts", ref_seeds: int = 3,
                          count: int | None = None, relax_times=None, pour_variants=None, ranks: int = 1,
-                         margin: float | None = None, progress=print) -> dict:
+                         margin: float | None = None, progress=print, methods=METHODS, damping: float = 0.5,
+                         target_phi="pour", shakes: int = 10, reuse_pours: bool = False,
+                         friction_scales=None) -> dict:
     if ref_seeds < 3:
         raise StepFailed(f"error-vs-runtime: --ref-seeds: expected at least 3 (the seed-to-seed spread is the "
                          f"error floor), got {ref_seeds}")
@@ -85,7 +97,19 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
     rec = RunRecord(outdir, "error-vs-runtime", inputs=scene_inputs(scene_path), btr=btr, progress=progress,
                     settings={"scene": os.path.abspath(scene_path), "engine": engine, "ref_seeds": ref_seeds,
                               "count": count, "relax_times": relax_times, "pour_variants": pour_variants, "np": ranks,
-                              "margin": margin})
+                              "margin": margin, "methods": list(methods), "damping": damping,
+                              "target_phi": target_phi, "shakes": shakes, "reuse_pours": reuse_pours,
+                              "friction_scales": friction_scales})
+    bad = [m for m in methods if m not in METHODS]
+    if bad:
+        raise StepFailed(f"error-vs-runtime: --methods: expected some of {', '.join(METHODS)}, got {', '.join(bad)}")
+
+    def poured(outdir_, settings_):
+        done = finished_pour(btr_packing, outdir_, settings_) if reuse_pours else None
+        if done is not None:
+            progress(f"  [{settings_.label}] reused the finished pour in {outdir_} ({done['wall_seconds']:.1f} s wall)")
+            return done
+        return pour(btr_packing, outdir_, settings_, progress)
     rows = []
     with rec.step("BTR deposit") as st:
         dep = btr_cli.deposit(btr, scene_path, outdir / "btr", "btr", None, count, progress)
@@ -93,14 +117,13 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
     btr_packing = read_packing(dep["csv"])
     scene = btr_packing.scene()
     base_max_time = float(scene["relax"]["max_time"])
-    relax_times = relax_times or [base_max_time * f for f in (0.05, 0.25, 1.0)]
-    pour_variants = pour_variants or [(0.25, 1e-3), (0.5, 1e-4), (1.0, float(scene["relax"]["stop_kinetic_ratio"]))]
+    relax_times = [base_max_time * f for f in (0.05, 0.25, 1.0)] if relax_times is None else relax_times
+    pour_variants = pour_variants if pour_variants is not None else [(0.25, 1e-3), (0.5, 1e-4), (1.0, float(scene["relax"]["stop_kinetic_ratio"]))]
 
     refs, ref_runs = [], []
     for seed in range(1, ref_seeds + 1):
         with rec.step(f"reference pour seed {seed}") as st:
-            s = pour(btr_packing, outdir / f"reference_seed{seed}", PourSettings(seed=seed, np=ranks,
-                                                                                 label=f"reference-{seed}"), progress)
+            s = poured(outdir / f"reference_seed{seed}", PourSettings(seed=seed, np=ranks, label=f"reference-{seed}"))
             refs.append(measures_of(s["packing"], margin))
             ref_runs.append(s)
             st.update(outputs=[s["packing"]], wall_seconds_engine=s["wall_seconds"], stop_reason=s["stop_reason"])
@@ -113,6 +136,7 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
     reference = {"seeds": list(range(1, ref_seeds + 1)), "mean": mean, "floor": floor,
                  "reach_threshold": reach_threshold(floor, ref_seeds), "values": refs,
                  "wall_seconds": [s["wall_seconds"] for s in ref_runs],
+                 "reused": [bool(s.get("reused")) for s in ref_runs],
                  "stop_reasons": [s["stop_reason"] for s in ref_runs]}
 
     def write_tables(rows):
@@ -133,7 +157,7 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
     with method("BTR", "btr", wall_seconds=dep["wall_seconds"], path=dep["csv"]) as row:
         row["values"] = m = measures_of(dep["csv"], margin)
         row["errors"] = errors_of(m, mean, names)
-    for t in relax_times:
+    for t in (relax_times if "relax" in methods else []):
         label = f"BTR + {engine} relax {t:.3g} s"
         with method(label, "relax", wall_seconds=None) as row:
             d = outdir / f"relax_{t:.3g}s"
@@ -143,15 +167,50 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
             row["values"] = m = measures_of(r["csv"], margin)
             row.update(wall_seconds=dep["wall_seconds"] + r["wall_seconds"], relax_wall_seconds=r["wall_seconds"],
                        errors=errors_of(m, mean, names), path=r["csv"])
+    def relax_row(row, kind_dir, csv, extra, start_wall):
+        r = btr_cli.relax(btr, csv, engine, outdir / kind_dir, np=ranks, progress=progress, label=kind_dir,
+                          extra_args=extra)
+        row["values"] = m = measures_of(r["csv"], margin)
+        row.update(wall_seconds=start_wall + r["wall_seconds"], relax_wall_seconds=r["wall_seconds"],
+                   errors=errors_of(m, mean, names), path=r["csv"], stdout=r["stdout"][-600:])
+        return r
+
+    if "damped" in methods:
+        with method(f"BTR + {engine} relax damped {damping:g}", "damped", wall_seconds=None) as row:
+            relax_row(row, f"relax_damped{damping:g}", dep["csv"], ["--damping", repr(float(damping))],
+                      dep["wall_seconds"])
+    if "target-phi" in methods:
+        target = mean["packing_fraction"] if target_phi == "pour" else float(target_phi)
+        scales = "" if friction_scales is None else ",".join(f"{x:g}" for x in friction_scales)
+        with method(f"BTR + {engine} target phi {target:.4g} damped {damping:g}" +
+                    (f" friction scales {scales}" if scales else ""), "target", wall_seconds=None,
+                    target_phi=target) as row:
+            r = relax_row(row, "relax_target_phi" + (f"_{scales}" if scales else ""), dep["csv"],
+                          ["--target-phi", repr(float(target)), "--damping", repr(float(damping))] +
+                          (["--friction-scales", scales] if scales else []) +
+                          (["--target-margin", repr(float(margin))] if margin is not None else []), dep["wall_seconds"])
+            row["target_phi_stages"] = read_json(Path(r["csv"]).with_suffix(".json")).get("target_phi")
+    if "shake" in methods:
+        with method(f"BTR + {shakes} shakes + {engine} relax", "shake", wall_seconds=None, shakes=shakes) as row:
+            sh = btr_cli.shake(btr, scene_path, outdir / f"shake{shakes}", shakes, count, progress=progress)
+            row["shaken_values"] = measures_of(sh["csv"], margin)
+            relax_row(row, f"relax_shake{shakes}", sh["csv"], [], sh["wall_seconds"])
+            row["shake_wall_seconds"] = sh["wall_seconds"]
+    if "preload" in methods:
+        with method(f"BTR + pre-loaded {engine} relax", "preload", wall_seconds=None) as row:
+            if "--preload" not in btr_cli.help_text(btr, "relax"):
+                raise StepFailed(f"{btr} relax has no --preload option: the pre-loaded start (issue 7 parts 1-2) is "
+                                 "not in this build")
+            relax_row(row, "relax_preload", dep["csv"], ["--preload"], dep["wall_seconds"])
     for k, (pace, stop) in enumerate(pour_variants):
         label = f"DEM pour pace {pace:g} stop {stop:.0e}"
         seed = ref_seeds + 1 + k
         with method(label, "pour", wall_seconds=None, seed=seed) as row:
-            s = pour(btr_packing, outdir / f"pour_pace{pace:g}_stop{stop:.0e}",
-                     PourSettings(seed=seed, np=ranks, pace=pace, stop_ratio=stop, label=f"pour-{pace:g}"), progress)
+            s = poured(outdir / f"pour_pace{pace:g}_stop{stop:.0e}",
+                       PourSettings(seed=seed, np=ranks, pace=pace, stop_ratio=stop, label=f"pour-{pace:g}"))
             row["values"] = m = measures_of(s["packing"], margin)
             row.update(wall_seconds=s["wall_seconds"], errors=errors_of(m, mean, names), path=s["packing"],
-                       stop_reason=s["stop_reason"])
+                       stop_reason=s["stop_reason"], reused=bool(s.get("reused")))
 
     with rec.step("table and plot") as st:
         result = write_tables(rows)
@@ -214,7 +273,12 @@ def plot(path, rows, floor, limit, names) -> str:
 
     n = len(names)
     fig, axes = plt.subplots(1, n, figsize=(4.2 * n, 3.8), squeeze=False)
-    markers = {"btr": ("s", "tab:green"), "relax": ("o", "tab:blue"), "pour": ("^", "tab:red")}
+    markers = {"btr": ("s", "tab:green"), "relax": ("o", "tab:blue"), "damped": ("v", "tab:cyan"),
+               "target": ("*", "tab:purple"), "shake": ("D", "tab:olive"), "preload": ("P", "tab:orange"),
+               "pour": ("^", "tab:red")}
+    names_of = {"btr": "BTR", "relax": "BTR + relaxation", "damped": "BTR + damped relaxation",
+                "target": "BTR + target phi", "shake": "BTR + shakes + relaxation", "preload": "BTR + pre-loaded",
+                "pour": "DEM pour"}
     for ax, key in zip(axes[0], names):
         for kind, (mk, col) in markers.items():
             sel = [r for r in rows if r["kind"] == kind and r["errors"][key] is not None]
@@ -222,8 +286,7 @@ def plot(path, rows, floor, limit, names) -> str:
                 continue
             x = [r["wall_seconds"] for r in sel]
             y = [max(r["errors"][key], floor[key] * 1e-3, 1e-12) for r in sel]
-            ax.plot(x, y, marker=mk, color=col, ls="-" if kind != "btr" else "none",
-                    label={"btr": "BTR", "relax": "BTR + relaxation", "pour": "DEM pour"}[kind])
+            ax.plot(x, y, marker=mk, color=col, ls="-" if kind in ("relax", "pour") else "none", label=names_of[kind])
         ax.axhline(max(floor[key], 1e-12), color="gray", ls="--", lw=1, label="floor: seed-to-seed std s")
         ax.axhline(max(limit[key], 1e-12), color="gray", ls=":", lw=1, label="reached below 2 s sqrt(1 + 1/n)")
         ax.set_xscale("log")
@@ -274,3 +337,139 @@ def markdown(res: dict, fig_name: str) -> str:
         lines += [f"Measured by `btr measure`: {defs}.", ""]
     lines += [f"![error vs run time]({fig_name})", ""]
     return "\n".join(lines)
+
+
+def run_size_study(scene_path: str, counts, outdir=None, progress=print, **kwargs) -> dict:
+    """error-vs-runtime at each grain count into OUTDIR/n<N>/, then size_study.{json,md,png}: each method's
+    wall time as a fraction of the reference pour's against N, and the cheapest method at the floor.
+    A count whose study fails is a row with its reason; the summary is rewritten after every count."""
+    outdir = Path(outdir) if outdir else default_outdir(scene_path) / "error_vs_runtime_sizes"
+    outdir.mkdir(parents=True, exist_ok=True)
+    sizes = []
+    for n in counts:
+        entry = {"count": int(n), "status": "running", "reason": "", "folder": str(outdir / f"n{n}")}
+        sizes.append(entry)
+        try:
+            res = finished_study(outdir / f"n{n}", scene_path, int(n), kwargs) if kwargs.get("reuse_pours") else None
+            if res is not None:
+                progress(f"size study: {n} grains: reused the finished study in {outdir / f'n{n}'}")
+            else:
+                res = run_error_vs_runtime(scene_path, outdir / f"n{n}", count=int(n), progress=progress, **kwargs)
+            entry.update(status="ok", **size_entry(res))
+        except StepFailed as e:
+            entry.update(status="fail", reason=str(e).strip().splitlines()[0][:300])
+            progress(f"size study: {n} grains FAILED ({entry['reason']}); the study goes on")
+        write_size_study(outdir, scene_path, sizes)
+    return {"sizes": sizes}
+
+
+def finished_study(folder: Path, scene_path: str, count: int, kwargs: dict) -> dict | None:
+    """The result of an error-vs-runtime study that finished in folder with the same scene, count and
+    settings (run.json), or None."""
+    if not (folder / "run.json").exists() or not (folder / "error_vs_runtime.json").exists():
+        return None
+    run = read_json(folder / "run.json")
+    st = run.get("settings", {})
+    want = {"scene": os.path.abspath(scene_path), "count": count, "engine": kwargs.get("engine", "liggghts"),
+            "ref_seeds": kwargs.get("ref_seeds", 3), "margin": kwargs.get("margin"),
+            "methods": list(kwargs.get("methods", METHODS)), "damping": kwargs.get("damping", 0.5),
+            "target_phi": kwargs.get("target_phi", "pour"), "shakes": kwargs.get("shakes", 10),
+            "friction_scales": kwargs.get("friction_scales"),
+            "relax_times": kwargs.get("relax_times"),
+            "pour_variants": None if kwargs.get("pour_variants") is None else [list(v) for v in kwargs["pour_variants"]]}
+    if run.get("status") != "ok" or any(st.get(k) != v for k, v in want.items()):
+        return None
+    return read_json(folder / "error_vs_runtime.json")
+
+
+def size_entry(res: dict) -> dict:
+    ref_wall = res["verdict"]["reference_pour_wall_seconds"]
+    methods = []
+    for r in res["rows"]:
+        row = {"method": r["method"], "kind": r["kind"], "status": r["status"], "reason": r.get("reason", "")}
+        if r["status"] == "ok":
+            reach = {k: r["errors"][k] is not None and r["errors"][k] <= res["reference"]["reach_threshold"][k]
+                     for k in res["measures"]}
+            row.update(wall_seconds=r["wall_seconds"], cost_ratio=r["wall_seconds"] / ref_wall, reaches=reach,
+                       values={k: r["values"][k] for k in res["measures"] if k != "rdf"},
+                       error_over_limit={k: (r["errors"][k] / res["reference"]["reach_threshold"][k]
+                                             if r["errors"][k] is not None and res["reference"]["reach_threshold"][k] > 0
+                                             else None) for k in res["measures"]})
+        methods.append(row)
+    per = res["verdict"]["per_measure"]
+    return {"grains": res["grains"], "reference_pour_wall_seconds": ref_wall, "measures": res["measures"],
+            "reference_mean": {k: v for k, v in res["reference"]["mean"].items() if k != "rdf"},
+            "methods": methods, "cheapest_at_floor": {k: (per[k]["method"], per[k]["cost_ratio_to_reference_pour"])
+                                                      if per[k] else None for k in per},
+            "verdict": res["verdict"]["summary"]}
+
+
+def write_size_study(outdir: Path, scene_path: str, sizes: list):
+    write_json(outdir / "size_study.json", {"scene": os.path.abspath(scene_path), "sizes": sizes})
+    done = [s for s in sizes if s["status"] == "ok"]
+    lines = [f"# Error against run time, size study: {os.path.basename(scene_path)}", "",
+             "Cost ratio = method wall time / mean wall time of the reference pours at the same N, measured in "
+             "the same study (pours marked reused ran earlier in the same folder). Reaches: error within "
+             "2 s sqrt(1 + 1/n) of the reference mean in packing fraction (phi), coordination (Z) and g(r).", ""]
+    for s in sizes:
+        if s["status"] != "ok":
+            lines += [f"## {s['count']} grains: {s['status']}", "", s["reason"] or "(running)", ""]
+            continue
+        lines += [f"## {s['grains']} grains (reference pour {s['reference_pour_wall_seconds']:.4g} s)", "",
+                  s["verdict"], ""]
+        rows = []
+        for m in s["methods"]:
+            if m["status"] != "ok":
+                rows.append([m["method"], "-", "-"] + ["-"] * len(s["measures"]) + [f"{m['status']}: {m['reason']}"])
+                continue
+            rows.append([m["method"], m["wall_seconds"], m["cost_ratio"]] +
+                        [("yes" if m["reaches"][k] else "no") + (f" ({m['error_over_limit'][k]:.2g}x)"
+                                                                  if m["error_over_limit"][k] is not None else "")
+                         for k in s["measures"]] + [""])
+        lines.append(report.md_table(["method", "wall [s]", "cost / pour"] +
+                                     [f"reaches {MEASURES[k]} (error / limit)" for k in s["measures"]] + ["note"],
+                                     rows))
+    fig = plot_sizes(outdir / "size_study.png", done)
+    if fig:
+        lines += [f"![cost ratio against N]({os.path.basename(fig)})", ""]
+    atomic_write_text(outdir / "size_study.md", "\n".join(lines))
+
+
+def plot_sizes(path: Path, done: list) -> str | None:
+    if not done:
+        return None
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    labels = []
+    for s in done:
+        for m in s["methods"]:
+            key = _size_label(m["method"])
+            if m["status"] == "ok" and m["kind"] != "pour" and key not in labels:
+                labels.append(key)
+    for key in labels:
+        pts = [(s["grains"], m["cost_ratio"], all(m["reaches"].values())) for s in done for m in s["methods"]
+               if m["status"] == "ok" and _size_label(m["method"]) == key]
+        if not pts:
+            continue
+        line, = ax.plot([p[0] for p in pts], [p[1] for p in pts], marker="o", label=key)
+        for n, c, ok in pts:
+            if ok:
+                ax.plot([n], [c], marker="o", ms=11, mfc="none", color=line.get_color())
+    ax.axhline(0.1, color="gray", ls=":", lw=1, label="target 0.1 x pour")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("grains N")
+    ax.set_ylabel("wall time / reference pour's")
+    ax.set_title("Cost against N (ringed: reaches the floor in every measure)")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    return report.save_figure(fig, path)
+
+
+def _size_label(method: str) -> str:
+    # "target phi 0.6271" differs with N: one line per kind of method
+    if " target phi " not in method:
+        return method
+    head, tail = method.split(" target phi ", 1)
+    return head + " target phi" + (" " + tail.split(" ", 1)[1] if " " in tail else "")

@@ -31,7 +31,7 @@ import numpy as np
 
 from . import dem_params
 from .geometry import Container
-from .io import Packing, atomic_write_text, write_json, write_packing
+from .io import Packing, atomic_write_text, read_json, read_packing, write_json, write_packing
 from .runner import StepFailed, run_command
 
 
@@ -443,3 +443,25 @@ def pour(btr: Packing, outdir: str | os.PathLike, settings: PourSettings = PourS
     progress(f"  [{settings.label}] done in {res['wall_seconds']:.1f} s wall, {meta['simulated_time']:.3g} s "
              f"simulated, stop: {stop}")
     return summary
+
+
+_REUSE_KEYS = ("seed", "pace", "stop_ratio", "drop_gap_d", "max_batches", "settle_max_time", "timestep_fraction")
+
+
+def finished_pour(btr: Packing, outdir: str | os.PathLike, settings: PourSettings, name: str = "poured") -> dict | None:
+    """The summary of a pour already finished in outdir with the same settings and the same grains (radii
+    equal to btr's, in order), or None. Its wall time is the one recorded when it ran; the summary says
+    so ("reused": true)."""
+    out = Path(outdir)
+    summary_path, meta_path, csv = out / "pour_summary.json", out / f"{name}.json", out / f"{name}.csv"
+    if not (summary_path.exists() and meta_path.exists() and csv.exists()):
+        return None
+    summary, meta = read_json(summary_path), read_json(meta_path)
+    ran = meta.get("pour", {})
+    # None in settings means "the scene's value", which the meta records resolved: compare only what was set.
+    if any(getattr(settings, k) is not None and ran.get(k) != getattr(settings, k) for k in _REUSE_KEYS):
+        return None
+    poured = read_packing(str(csv))
+    if len(poured) != len(btr) or not np.allclose(poured.radius, btr.radius, rtol=1e-12, atol=0.0):
+        return None
+    return dict(summary, reused=True)
