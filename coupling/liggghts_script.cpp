@@ -122,9 +122,10 @@ std::string per_type(const TypeTable& t, Get get) {
   return s;
 }
 
-// Pair values: unlike species mix (pair_material); a wall contact takes the grain's value.
-template <class Get>
-std::string per_type_pair(const TypeTable& t, Get get) {
+// Pair values: unlike species mix (pair_material); a wall contact takes the grain's value, read by
+// wall_get (the same getter unless a wall value differs, as gammat's wall_gamma_t).
+template <class Get, class WallGet>
+std::string per_type_pair(const TypeTable& t, Get get, WallGet wall_get) {
   const int n = static_cast<int>(t.type_material.size());
   std::string s = " " + std::to_string(n);
   for (int i = 1; i <= n; ++i)
@@ -132,31 +133,18 @@ std::string per_type_pair(const TypeTable& t, Get get) {
       const Material& a = t.type_material[i - 1];
       const Material& b = t.type_material[j - 1];
       double v;
-      if (i == t.wall_type && j == t.wall_type) v = get(a);
-      else if (i == t.wall_type) v = get(b);
-      else if (j == t.wall_type) v = get(a);
+      if (i == t.wall_type && j == t.wall_type) v = wall_get(a);
+      else if (i == t.wall_type) v = wall_get(b);
+      else if (j == t.wall_type) v = wall_get(a);
       else v = get(pair_material(a, b));
       s += " " + g17(v);
     }
   return s;
 }
 
-// gammat: gamma_t between grains, the grain species' wall_gamma_t against a wall.
-std::string per_type_pair_wall(const TypeTable& t) {
-  const int n = static_cast<int>(t.type_material.size());
-  std::string s = " " + std::to_string(n);
-  for (int i = 1; i <= n; ++i)
-    for (int j = 1; j <= n; ++j) {
-      const Material& a = t.type_material[i - 1];
-      const Material& b = t.type_material[j - 1];
-      double v;
-      if (i == t.wall_type && j == t.wall_type) v = a.wall_gamma_t;
-      else if (i == t.wall_type) v = b.wall_gamma_t;
-      else if (j == t.wall_type) v = a.wall_gamma_t;
-      else v = pair_material(a, b).gamma_t;
-      s += " " + g17(v);
-    }
-  return s;
+template <class Get>
+std::string per_type_pair(const TypeTable& t, Get get) {
+  return per_type_pair(t, get, get);
 }
 
 std::string wall_geometry(const DemWall& w) {
@@ -342,7 +330,10 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
       << per_type_pair(types, [](const Material& m) { return m.kt; }) << "\n";
     s << "fix btr_gamman all property/global gamman peratomtypepair"
       << per_type_pair(types, [](const Material& m) { return m.gamma_n; }) << "\n";
-    s << "fix btr_gammat all property/global gammat peratomtypepair" << per_type_pair_wall(types) << "\n";
+    s << "fix btr_gammat all property/global gammat peratomtypepair"
+      << per_type_pair(types, [](const Material& m) { return m.gamma_t; },
+                       [](const Material& m) { return m.wall_gamma_t; })
+      << "\n";
   }
   if (hooke)
     s << "fix btr_vchar all property/global characteristicVelocity scalar "
