@@ -69,7 +69,11 @@ json measures_to_json(const btr::PackingMeasures& m) {
             {"profile", profile_json(h.profile)}};
     if (h.valid) {
       heap["angle_of_repose_deg"] = h.angle_deg;
-      if (h.by_sides) heap["angle_left_deg"] = h.angle_left_deg, heap["angle_right_deg"] = h.angle_right_deg;
+      if (h.by_sides) {
+        heap["angle_left_deg"] = h.left_valid ? json(h.angle_left_deg) : json(nullptr);
+        heap["angle_right_deg"] = h.right_valid ? json(h.angle_right_deg) : json(nullptr);
+      }
+      if (!h.note.empty()) heap["note"] = h.note;
     } else {
       heap["note"] = h.note;
     }

@@ -634,9 +634,17 @@ HeapMeasures heap_measures(const Grains& grains, int dimension, double source_x,
   h.profile_points = fl.points + fr.points;
   h.grains_beyond_flank = grains_beyond(left, fl.foot, width) + grains_beyond(right, fr.foot, width);
   h.angle_left_deg = fl.angle, h.angle_right_deg = fr.angle;
-  h.valid = fl.ok && fr.ok;
-  if (h.valid) h.angle_deg = 0.5 * (h.angle_left_deg + h.angle_right_deg);
-  else h.note = "fewer than 3 profile points on a flank between 20% and 80% of the height";
+  h.left_valid = fl.ok, h.right_valid = fr.ok;
+  // A heap built against an end wall (a Hele-Shaw cell fed at a corner) has one flank only: it is
+  // measured on the side that has one.
+  h.valid = fl.ok || fr.ok;
+  if (fl.ok && fr.ok) h.angle_deg = 0.5 * (h.angle_left_deg + h.angle_right_deg);
+  else if (h.valid) {
+    h.angle_deg = fl.ok ? fl.angle : fr.angle;
+    h.note = std::string("one flank only (the ") + (fl.ok ? "left" : "right") + " side of the axis)";
+  } else {
+    h.note = "fewer than 3 profile points on both flanks between 20% and 80% of the height";
+  }
   return h;
 }
 

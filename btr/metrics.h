@@ -52,6 +52,7 @@ struct HeapMeasures {
   double angle_deg = 0.0;        // radial profile, or the mean of both sides
   double angle_left_deg = 0.0;   // by_sides only
   double angle_right_deg = 0.0;  // by_sides only
+  bool left_valid = false, right_valid = false;  // by_sides: which flanks had a fit (valid: either)
   int profile_points = 0;        // profile points in the fitted flanks
   std::int64_t grains_beyond_flank = 0;  // grains beyond the lower end of the fitted flank (foot, strays)
   std::vector<ProfilePoint> profile;    // against the distance from the axis, or x - source x (by_sides)
@@ -110,7 +111,8 @@ std::vector<ProfilePoint> surface_profile(const Grains& grains, const std::vecto
 // squares line through the flank. Grains beyond the flank's foot (strays that rolled away, a flat tail)
 // never enter the fit.
 // by_sides: fit each side of the axis on |x - source_x| (2D, and 3D Hele-Shaw cells, whose heap is a 2D
-// pile between the plates); otherwise on the distance from the axis.
+// pile between the plates); the angle is the mean of the sides that have a flank (a heap against an
+// end wall has one). Otherwise on the distance from the axis.
 HeapMeasures heap_measures(const Grains& grains, int dimension, double source_x, double source_y,
                            bool by_sides);
 inline HeapMeasures heap_measures(const Grains& grains, int dimension, double source_x, double source_y) {

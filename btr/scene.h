@@ -25,6 +25,13 @@ struct Material {
   double restitution = 0.5;
   double friction = 0.5;
   double rolling_friction = 0.0;  // 0 = off
+  // Explicit linear contact (relax.model = "hooke-stiffness" only, else 0): LIGGGHTS' hooke/stiffness
+  // coefficients, F_n = kn delta - m_eff gamma_n v_n, F_t = -kt xi - m_eff gamma_t v_t (Silbert et al.).
+  double kn = 0.0;             // N/m
+  double kt = 0.0;             // N/m
+  double gamma_n = 0.0;        // 1/s (multiplied by the effective mass)
+  double gamma_t = 0.0;        // 1/s, grain-grain
+  double wall_gamma_t = 0.0;   // 1/s, this species on a wall (defaults to gamma_t)
 };
 
 // One component of the grain mixture; a monodisperse or polydisperse scene has exactly one.
@@ -55,7 +62,7 @@ struct SourceSpec {
 
 struct RelaxSpec {
   std::string engine = "liggghts";  // liggghts | yade
-  std::string model = "hertz";      // hertz | hooke
+  std::string model = "hertz";      // hertz | hooke | hooke-stiffness
   double max_time = 0.2;            // s
   double stop_kinetic_ratio = 1e-6; // stop when kinetic energy < ratio * sum_i m_i g d_i
   double timestep_fraction = 0.2;   // of the Rayleigh / contact time

@@ -35,15 +35,16 @@ class SceneParser {
                    {"scene", "grains", "container", "source", "material", "relax", "intruder", "shaking", "drum"});
     scene_.file = path_;
     parse_scene(required_table("scene"));
+    parse_relax();  // first: relax.model decides which material keys are allowed
     auto material = rd_.table(root_, "material", "[material]");
     Material defaults = material ? parse_material(*material, Material{}) : Material{};
-    parse_relax();
     Section container = required_table("container");
     Section source = required_table("source");
     const std::string source_kind = rd_.required_choice(source, "kind", {"point", "rain", "region", "list"});
     list_source_ = source_kind == "list";
     Section grains = required_table("grains");
     parse_grains(grains, defaults);
+    check_stiffness_materials();
     parse_container(container);
     parse_source(source, source_kind);
     finish_list_source(grains);
@@ -143,8 +144,21 @@ class SceneParser {
   }
 
   Material parse_material(const Section& s, const Material& base) {
-    rd_.check_keys(s, {"young", "poisson", "restitution", "friction", "rolling_friction"});
+    rd_.check_keys(s, {"young", "poisson", "restitution", "friction", "rolling_friction", "kn", "kt", "gamma_n",
+                       "gamma_t", "wall_gamma_t"});
     Material m = base;
+    if (scene_.relax.model == "hooke-stiffness") {
+      m.kn = rd_.number_or(s, "kn", base.kn, positive, "a positive normal stiffness [N/m]");
+      m.kt = rd_.number_or(s, "kt", base.kt, positive, "a positive tangential stiffness [N/m]");
+      m.gamma_n = rd_.number_or(s, "gamma_n", base.gamma_n, non_negative, "a normal damping rate >= 0 [1/s]");
+      m.gamma_t = rd_.number_or(s, "gamma_t", base.gamma_t, non_negative, "a tangential damping rate >= 0 [1/s]");
+      m.wall_gamma_t = rd_.number_or(s, "wall_gamma_t", s.tbl->contains("gamma_t") ? m.gamma_t : base.wall_gamma_t,
+                                     non_negative, "a grain-wall tangential damping rate >= 0 [1/s]");
+    } else {
+      for (const char* k : {"kn", "kt", "gamma_n", "gamma_t", "wall_gamma_t"})
+        rd_.forbid(s, k, "unless relax.model = \"hooke-stiffness\" (the " + scene_.relax.model +
+                             " model derives its stiffness from young and poisson)");
+    }
     m.young = rd_.number_or(s, "young", base.young, positive, "a positive Young's modulus [Pa]");
     m.poisson = rd_.number_or(s, "poisson", base.poisson, [](double v) { return v > -1.0 && v < 0.5; },
                               "a Poisson ratio in (-1, 0.5)");
@@ -164,7 +178,7 @@ class SceneParser {
                         "target_phi"});
     RelaxSpec& r = scene_.relax;
     r.engine = rd_.choice(*s, "engine", {"liggghts", "yade"}).value_or(r.engine);
-    r.model = rd_.choice(*s, "model", {"hertz", "hooke"}).value_or(r.model);
+    r.model = rd_.choice(*s, "model", {"hertz", "hooke", "hooke-stiffness"}).value_or(r.model);
     r.max_time = rd_.number_or(*s, "max_time", r.max_time, positive, "a positive time [s]");
     r.stop_kinetic_ratio = rd_.number_or(*s, "stop_kinetic_ratio", r.stop_kinetic_ratio, positive,
                                          "a positive ratio");
@@ -186,6 +200,16 @@ class SceneParser {
     if (auto t = rd_.number(*s, "target_phi", [](double v) { return v > 0.0 && v < 1.0; },
                             "a target bulk packing fraction in (0, 1)"))
       r.target_phi = *t;
+  }
+
+  // hooke-stiffness takes no default stiffness: every component must have kn and kt from [material]
+  // or its own material table.
+  void check_stiffness_materials() {
+    if (scene_.relax.model != "hooke-stiffness") return;
+    for (const Component& c : scene_.grains.components)
+      if (!(c.material.kn > 0.0) || !(c.material.kt > 0.0))
+        rd_.fail(0, "[material] (or the material of species " + std::to_string(c.species) +
+                        "): relax.model = \"hooke-stiffness\" needs kn and kt (positive stiffnesses [N/m])");
   }
 
   RadiusSpec parse_radius(const Section& s) {

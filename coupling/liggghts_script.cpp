@@ -122,9 +122,10 @@ std::string per_type(const TypeTable& t, Get get) {
   return s;
 }
 
-// Pair values: unlike species mix (pair_material); a wall contact takes the grain's value.
-template <class Get>
-std::string per_type_pair(const TypeTable& t, Get get) {
+// Pair values: unlike species mix (pair_material); a wall contact takes the grain's value, read by
+// wall_get (the same getter unless a wall value differs, as gammat's wall_gamma_t).
+template <class Get, class WallGet>
+std::string per_type_pair(const TypeTable& t, Get get, WallGet wall_get) {
   const int n = static_cast<int>(t.type_material.size());
   std::string s = " " + std::to_string(n);
   for (int i = 1; i <= n; ++i)
@@ -132,13 +133,18 @@ std::string per_type_pair(const TypeTable& t, Get get) {
       const Material& a = t.type_material[i - 1];
       const Material& b = t.type_material[j - 1];
       double v;
-      if (i == t.wall_type && j == t.wall_type) v = get(a);
-      else if (i == t.wall_type) v = get(b);
-      else if (j == t.wall_type) v = get(a);
+      if (i == t.wall_type && j == t.wall_type) v = wall_get(a);
+      else if (i == t.wall_type) v = wall_get(b);
+      else if (j == t.wall_type) v = wall_get(a);
       else v = get(pair_material(a, b));
       s += " " + g17(v);
     }
   return s;
+}
+
+template <class Get>
+std::string per_type_pair(const TypeTable& t, Get get) {
+  return per_type_pair(t, get, get);
 }
 
 std::string wall_geometry(const DemWall& w) {
@@ -177,6 +183,7 @@ std::string data_file(const Packing& packing, const Scene& scene, const Box& box
 
 std::vector<double> liggghts_damping_gamma(const Grains& grains, const Scene& scene, double damping) {
   const bool hooke = scene.relax.model == "hooke";
+  const bool stiffness = scene.relax.model == "hooke-stiffness";
   const double v_char = hooke ? hooke_characteristic_velocity(grains) : 0.0;
   std::vector<double> gamma;
   for (const Component& c : scene.grains.components) {
@@ -191,7 +198,9 @@ std::vector<double> liggghts_damping_gamma(const Grains& grains, const Scene& sc
     const double r = sum / n, m = grain_mass(r, c.density), r_eff = 0.5 * r;
     const double y_eff = effective_young(c.material, c.material);
     double k;
-    if (hooke) {
+    if (stiffness) {
+      k = c.material.kn;
+    } else if (hooke) {
       k = hooke_stiffness(r_eff, 0.5 * m, y_eff, v_char);
     } else {  // Hertz: F = 4/3 E* sqrt(R*) delta^(3/2), k = dF/ddelta at F = m g
       const double delta = std::pow(3.0 * m * kGravity / (4.0 * y_eff * std::sqrt(r_eff)), 2.0 / 3.0);
@@ -241,8 +250,10 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   for (const Material& m : types.type_material) y_min = std::min(y_min, m.young), y_max = std::max(y_max, m.young);
 
   const bool hooke = scene.relax.model == "hooke";
+  const bool stiffness = scene.relax.model == "hooke-stiffness";
   const bool rolling = uses_rolling_friction(scene);
-  const std::string models = std::string("model ") + (hooke ? "hooke" : "hertz") + " tangential history" +
+  const std::string models = std::string("model ") + (stiffness ? "hooke/stiffness" : hooke ? "hooke" : "hertz") +
+                             " tangential history" +
                              (rolling ? " rolling_friction epsd2" : "");
 
   std::ostringstream s;
@@ -309,6 +320,21 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   if (rolling)
     s << "fix btr_rolling all property/global coefficientRollingFriction peratomtypepair"
       << per_type_pair(types, [](const Material& m) { return m.rolling_friction; }) << "\n";
+  if (stiffness) {
+    // hooke/stiffness (absolute_damping off): F_n = kn delta - m_eff gamman v_n, F_t = -kt xi - m_eff gammat v_t.
+    s << "# hooke-stiffness: kn, kt [N/m] and gamman, gammat [1/s, times m_eff]; unlike species: means;\n"
+      << "# grain-wall: the grain's kn, kt, gamma_n and wall_gamma_t.\n";
+    s << "fix btr_kn all property/global kn peratomtypepair"
+      << per_type_pair(types, [](const Material& m) { return m.kn; }) << "\n";
+    s << "fix btr_kt all property/global kt peratomtypepair"
+      << per_type_pair(types, [](const Material& m) { return m.kt; }) << "\n";
+    s << "fix btr_gamman all property/global gamman peratomtypepair"
+      << per_type_pair(types, [](const Material& m) { return m.gamma_n; }) << "\n";
+    s << "fix btr_gammat all property/global gammat peratomtypepair"
+      << per_type_pair(types, [](const Material& m) { return m.gamma_t; },
+                       [](const Material& m) { return m.wall_gamma_t; })
+      << "\n";
+  }
   if (hooke)
     s << "fix btr_vchar all property/global characteristicVelocity scalar "
       << g17(hooke_characteristic_velocity(grains)) << "   # sqrt(2 g d_max)\n";

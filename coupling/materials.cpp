@@ -23,6 +23,11 @@ Material pair_material(const Material& a, const Material& b) {
   m.restitution = 0.5 * (a.restitution + b.restitution);
   m.friction = 0.5 * (a.friction + b.friction);
   m.rolling_friction = 0.5 * (a.rolling_friction + b.rolling_friction);
+  m.kn = 0.5 * (a.kn + b.kn);
+  m.kt = 0.5 * (a.kt + b.kt);
+  m.gamma_n = 0.5 * (a.gamma_n + b.gamma_n);
+  m.gamma_t = 0.5 * (a.gamma_t + b.gamma_t);
+  m.wall_gamma_t = 0.5 * (a.wall_gamma_t + b.wall_gamma_t);
   return m;
 }
 

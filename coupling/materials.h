@@ -21,7 +21,8 @@ constexpr double kGravity = 9.81;  // m/s^2, along -z
 // naming the species and the species the scene has if there is none.
 int component_index(const Scene& scene, int species);
 
-// Restitution, friction and rolling friction of a contact between two materials (mean of the two).
+// Restitution, friction, rolling friction and the explicit stiffness/damping (hooke-stiffness) of a
+// contact between two materials (mean of the two).
 Material pair_material(const Material& a, const Material& b);
 
 // The material of every wall of the container.

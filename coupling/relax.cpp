@@ -106,7 +106,9 @@ double kinetic_energy_bound(const Grains& grains, const Scene& scene) {
                      const double r_eff = b == 0 ? ra : ra * grains[b - 1].r / (ra + grains[b - 1].r);
                      const double m_eff = b == 0 ? ma : ma * m[b - 1] / (ma + m[b - 1]);
                      const double y_eff = effective_young(material(a), b == 0 ? wall : material(b));
-                     if (hooke)
+                     if (scene.relax.model == "hooke-stiffness")
+                       energy += 0.5 * pair_material(material(a), b == 0 ? material(a) : material(b)).kn * depth * depth;
+                     else if (hooke)
                        energy += 0.5 * hooke_stiffness(r_eff, m_eff, y_eff, v) * depth * depth;
                      else
                        energy += 8.0 / 15.0 * y_eff * std::sqrt(r_eff) * std::pow(depth, 2.5);

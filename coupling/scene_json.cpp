@@ -106,7 +106,12 @@ json material_to_json(const Material& m) {
           {"poisson", m.poisson},
           {"restitution", m.restitution},
           {"friction", m.friction},
-          {"rolling_friction", m.rolling_friction}};
+          {"rolling_friction", m.rolling_friction},
+          {"kn", m.kn},
+          {"kt", m.kt},
+          {"gamma_n", m.gamma_n},
+          {"gamma_t", m.gamma_t},
+          {"wall_gamma_t", m.wall_gamma_t}};
 }
 
 json radius_to_json(const RadiusSpec& r) {
@@ -136,7 +141,8 @@ RadiusSpec radius_from_json(const Reader& rd, const json& parent, const std::str
 }
 
 Material material_from_json(const Reader& rd, const json& parent, const std::string& path) {
-  const json& j = rd.object(parent, path, "material", {"young", "poisson", "restitution", "friction", "rolling_friction"});
+  const json& j = rd.object(parent, path, "material", {"young", "poisson", "restitution", "friction", "rolling_friction",
+                                                       "kn", "kt", "gamma_n", "gamma_t", "wall_gamma_t"});
   std::string p = Reader::join(path, "material");
   Material m;
   m.young = rd.number(j, p, "young");
@@ -144,6 +150,10 @@ Material material_from_json(const Reader& rd, const json& parent, const std::str
   m.restitution = rd.number(j, p, "restitution");
   m.friction = rd.number(j, p, "friction");
   m.rolling_friction = rd.number(j, p, "rolling_friction");
+  // Optional: packings written before the hooke-stiffness model have no stiffness keys.
+  for (auto [key, field] : {std::pair{"kn", &m.kn}, {"kt", &m.kt}, {"gamma_n", &m.gamma_n}, {"gamma_t", &m.gamma_t},
+                            {"wall_gamma_t", &m.wall_gamma_t}})
+    if (j.contains(key)) *field = rd.number(j, p, key);
   return m;
 }
 

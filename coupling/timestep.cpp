@@ -115,8 +115,51 @@ StableStep stable_timestep(const Grains& grains, const Scene& scene, DampedMode 
              fmt(s.fraction) + damping_note() + " = " + fmt(s.step) + " s";
     return s;
   }
+  if (scene.relax.model == "hooke-stiffness") {
+    // Explicit stiffness: contact time pi / sqrt(kn/m_eff - (gamma_n/2)^2) (gamma_n per unit effective
+    // mass), shortest over grain pairs (unlike species: the mean kn, gamma_n) and grain-wall contacts
+    // (m_eff = m) at the ends of each species' radius range.
+    double best = std::numeric_limits<double>::infinity();
+    std::string what;
+    auto consider = [&](double kn, double gamma_n, double m_eff, const std::string& label) {
+      const double w2 = kn / m_eff - 0.25 * gamma_n * gamma_n;
+      if (!(w2 > 0.0))
+        throw std::runtime_error("relax.model = \"hooke-stiffness\": " + label + " is overdamped (gamma_n/2 = " +
+                                 fmt(0.5 * gamma_n) + " 1/s >= sqrt(kn/m_eff) = " + fmt(std::sqrt(kn / m_eff)) +
+                                 " 1/s); no contact time");
+      const double t = M_PI / std::sqrt(w2);
+      if (t < best) best = t, what = label + ": kn = " + fmt(kn) + " N/m, m_eff = " + fmt(m_eff) + " kg, gamma_n = " +
+                                     fmt(gamma_n) + " 1/s";
+    };
+    for (const auto& [ca, ra] : ranges) {
+      const Component& a = comps[ca];
+      for (double r1 : {ra.min, ra.max}) {
+        const double m1 = grain_mass(r1, a.density);
+        consider(a.material.kn, a.material.gamma_n, m1, "grain R = " + fmt(r1) + " m of species " +
+                                                            std::to_string(a.species) + " on a wall");
+        for (const auto& [cb, rb] : ranges) {
+          if (cb < ca) continue;
+          const Component& b = comps[cb];
+          const Material p = pair_material(a.material, b.material);
+          for (double r2 : {rb.min, rb.max}) {
+            const double m2 = grain_mass(r2, b.density);
+            consider(p.kn, p.gamma_n, m1 * m2 / (m1 + m2),
+                     "grains R = " + fmt(r1) + " m (species " + std::to_string(a.species) + ") and R = " + fmt(r2) +
+                         " m (species " + std::to_string(b.species) + ")");
+          }
+        }
+      }
+    }
+    s.characteristic_time = best;
+    s.damping_factor = verlet;  // the contact time above already includes the damping
+    s.step = s.fraction * s.damping_factor * best;
+    s.rule = "contact time pi/sqrt(kn/m_eff - (gamma_n/2)^2) = " + fmt(best) + " s (hooke-stiffness; " + what +
+             ") x " + fmt(s.fraction) + damping_note() + " = " + fmt(s.step) + " s";
+    return s;
+  }
   if (scene.relax.model != "hooke")
-    throw std::runtime_error("relax.model: expected \"hertz\" or \"hooke\", got \"" + scene.relax.model + "\"");
+    throw std::runtime_error("relax.model: expected \"hertz\", \"hooke\" or \"hooke-stiffness\", got \"" +
+                             scene.relax.model + "\"");
 
   // Hooke: the shortest contact time over the contacts the packing can make. For a pair of species
   // k/m* is largest at an end of each species' radius range; a wall contact is a partner of infinite

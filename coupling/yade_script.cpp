@@ -198,6 +198,12 @@ const char* kHeader = R"(#
 
 std::string yade_script(const Packing& packing, const Scene& scene, const RelaxPlan& plan) {
   const std::string& model = scene.relax.model;
+  if (model == "hooke-stiffness")
+    refuse(scene, "relax.model",
+           "\"hooke-stiffness\" is LIGGGHTS-only: YADE's linear law (ViscElMat) takes an absolute damping cn [N s/m]\n"
+           "per material and mixes kn in series, while this model's gamma_n is a rate multiplied by each contact's\n"
+           "effective mass and its grain-wall gamma_t differs from the grain-grain one; no YADE material reproduces\n"
+           "both for every pair. Use engine = \"liggghts\", or relax.model = \"hooke\" with YADE");
   if (model != "hertz" && model != "hooke") refuse(scene, "relax.model", "expected \"hertz\" or \"hooke\", got \"" + model + "\"");
   if (scene.dimension != 2 && scene.dimension != 3) refuse(scene, "scene.dimension", "expected 2 or 3");
   if (packing.grains.empty()) refuse(scene, "packing", "has no grains to relax");

@@ -135,6 +135,16 @@ def main(argv=None) -> int:
     dr.add_argument("--revolutions", type=float, default=3.0)
     dr.add_argument("--tiny", action="store_true", help="300 grains, 20 steps per revolution, one revolution")
 
+    hs = sub.add_parser("hele-shaw", help="angle of repose in Hele-Shaw cells (seed 003): DEM vs BTR vs BTR + relax")
+    hs.add_argument("-o", "--out", help="output folder (default out/hele_shaw)")
+    hs.add_argument("--reduced", action="store_true", help="3 N values, 6 widths, 3 widths for the second size, "
+                                                         "cell 40 d (under 30 min on a quiet machine)")
+    hs.add_argument("--tiny", action="store_true", help="one cell of 40 grains (for tests)")
+    hs.add_argument("--pace", type=float, default=1.0,
+                    help="pour rate: batch interval / batch free-fall time (smaller pours faster)")
+    hs.add_argument("--n", type=int, help="grains at w = 3 d (skips the theta-against-N sweep)")
+    hs.add_argument("--seed", type=int, default=1)
+
     args = ap.parse_args(argv)
     try:
         if args.command == "compare":
@@ -205,6 +215,13 @@ def main(argv=None) -> int:
             if not dims or any(x not in ("2", "3") for x in dims):
                 raise InputError(f"--dims: expected 3 and/or 2, comma-separated, got {args.dims!r}")
             run_brazil_nut(args.out, tuple(int(x) for x in dims), args.tiny, args.seed, progress)
+        elif args.command == "hele-shaw":
+            from btrdem.hele_shaw import run_hele_shaw
+            if not args.pace > 0:
+                raise InputError(f"--pace: expected a positive number, got {args.pace}")
+            if args.n is not None and args.n < 1:
+                raise InputError(f"--n: expected a positive number of grains, got {args.n}")
+            run_hele_shaw(args.out, args.reduced, args.tiny, args.pace, args.seed, progress, args.n)
         elif args.command == "drum":
             from btrdem.drum import run_drum
             if not args.revolutions > 0:

@@ -449,5 +449,43 @@ TEST(SurfaceDepth, DepthBelowTheTopOfEachColumn) {
     EXPECT_NEAR(depth[i], (g[i].x.x() < 0.005 ? 0.02 : 0.006) - g[i].x.z(), 1e-15) << i;
 }
 
+// A Hele-Shaw heap poured at a corner leans on the left end wall: one flank only, measured on its own,
+// and stray grains rolled far along the floor beyond the foot do not enter the fit.
+TEST(HeapMeasures, HeleShawHeapAgainstAnEndWallHasOneFlank) {
+  const double r = 1e-3, H0 = 0.04, theta = 26.0, src = -0.099;
+  for (bool strays : {false, true}) {
+    Grains g;
+    for (int k = 0; k < 100; ++k) {
+      const double x = src + (k + 0.5) * 2 * r;
+      const double h = std::max(2 * r, H0 - std::tan(theta * kPi / 180) * (x - src));
+      if (h > 2 * r || !strays) column(g, x, (k % 2 ? 0.5 : -0.5) * r, h, r);
+    }
+    if (strays)  // isolated grains on the floor every 6 r up to the far end
+      for (double x = src + 0.09; x < 0.099; x += 6 * r) g.push_back(grain(x, 0.0, r, r));
+    Container cell;
+    cell.kind = ContainerKind::HeleShaw;
+    cell.size_x = 0.2;
+    cell.gap = 3 * r;
+    const PackingMeasures m = measure_packing(g, 3, cell, {}, true, src, 0.0);
+    ASSERT_TRUE(m.heap.valid) << m.heap.note;
+    EXPECT_FALSE(m.heap.left_valid);
+    EXPECT_TRUE(m.heap.right_valid);
+    EXPECT_NEAR(m.heap.angle_deg, theta, 1e-9) << "strays: " << strays;
+    EXPECT_NE(m.heap.note.find("one flank only"), std::string::npos) << m.heap.note;
+  }
+}
+
+// No flank on either side (a flat bed in a cell) stays invalid.
+TEST(HeapMeasures, HeleShawFlatBedHasNoFlank) {
+  const double r = 1e-3;
+  Grains g;
+  for (int k = 0; k < 50; ++k) column(g, -0.05 + (k + 0.5) * 2 * r, 0.0, 6 * r, r);
+  Container cell;
+  cell.kind = ContainerKind::HeleShaw;
+  cell.size_x = 0.2;
+  cell.gap = 3 * r;
+  EXPECT_FALSE(measure_packing(g, 3, cell, {}, true, -0.03, 0.0).heap.valid);
+}
+
 }  // namespace
 }  // namespace btr

@@ -399,5 +399,38 @@ TEST_F(SceneFile, MissingFile) {
   }
 }
 
+// relax.model = "hooke-stiffness" takes kn, kt, gamma_n, gamma_t, wall_gamma_t from [material];
+// the other models refuse them, and hooke-stiffness refuses to run without kn and kt.
+TEST_F(SceneFile, HookeStiffnessMaterial) {
+  const std::string stiff = std::string(kBase) +
+                            "\n[material]\nkn = 24.6\nkt = 7.0\ngamma_n = 4952.0\nwall_gamma_t = 4900.0\n"
+                            "\n[relax]\nmodel = \"hooke-stiffness\"\n";
+  path_ = write("x.toml", stiff);
+  const Scene s = load_scene(path_);
+  const Material& m = s.grains.components[0].material;
+  EXPECT_EQ(s.relax.model, "hooke-stiffness");
+  EXPECT_DOUBLE_EQ(m.kn, 24.6);
+  EXPECT_DOUBLE_EQ(m.kt, 7.0);
+  EXPECT_DOUBLE_EQ(m.gamma_n, 4952.0);
+  EXPECT_DOUBLE_EQ(m.gamma_t, 0.0);
+  EXPECT_DOUBLE_EQ(m.wall_gamma_t, 4900.0);
+  // wall_gamma_t defaults to gamma_t
+  const std::string same = replace(stiff, "wall_gamma_t = 4900.0", "gamma_t = 3.0");
+  path_ = write("x.toml", same);
+  EXPECT_DOUBLE_EQ(load_scene(path_).grains.components[0].material.wall_gamma_t, 3.0);
+
+  const std::string no_kt = replace(stiff, "kt = 7.0\n", "");
+  EXPECT_NE(error_of(no_kt).find("relax.model = \"hooke-stiffness\" needs kn and kt"), std::string::npos)
+      << error_of(no_kt);
+  const std::string negative = replace(stiff, "gamma_n = 4952.0", "gamma_n = -1.0");
+  EXPECT_EQ(error_of(negative).rfind(at(negative, "gamma_n = -1.0") +
+                                         "material.gamma_n: expected a normal damping rate >= 0 [1/s], got", 0),
+            0u)
+      << error_of(negative);
+  const std::string hertz = replace(stiff, "model = \"hooke-stiffness\"", "model = \"hertz\"");
+  EXPECT_NE(error_of(hertz).find("material.kn: not used unless relax.model = \"hooke-stiffness\""), std::string::npos)
+      << error_of(hertz);
+}
+
 }  // namespace
 }  // namespace btr

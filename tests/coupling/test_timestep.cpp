@@ -123,3 +123,19 @@ TEST(Timestep, YadeTangentialDampingShortensTheStepFurther) {
   EXPECT_NEAR(st.step, 0.2 * 0.3262604 * 1.066317e-6, 1e-12);
   EXPECT_NE(st.rule.find("tangential"), std::string::npos) << st.rule;
 }
+
+// hooke-stiffness (seed 003, d = 1 mm, rho = 2400): m = 1.2566371e-6 kg, kn = 24.655 N/m,
+// gamma_n = 4952.4 1/s. Grain pair: m_eff = m/2, pi / sqrt(kn/m_eff - (gamma_n/2)^2) = 5.459877e-4 s;
+// grain on a wall: m_eff = m, 8.554053e-4 s. The pair is the shorter.
+TEST(Timestep, HookeStiffnessContactTimeFromKnAndMass) {
+  btr::Scene s = one_species(2400, 5e6, 0.3, 0.26, "hooke-stiffness");
+  s.grains.components[0].material.kn = 24.655;
+  s.grains.components[0].material.kt = 24.655 * 2 / 7;
+  s.grains.components[0].material.gamma_n = 4952.4;
+  const btr::StableStep st = btr::stable_timestep(two_grains(5e-4, 5e-4), s);
+  EXPECT_NEAR(st.characteristic_time, 5.459877e-4, 1e-9);
+  EXPECT_NE(st.rule.find("hooke-stiffness"), std::string::npos) << st.rule;
+  // gamma_n above 2 sqrt(kn/m_eff) = 12531 1/s: no oscillation, no contact time: refused.
+  s.grains.components[0].material.gamma_n = 13000;
+  EXPECT_THROW(btr::stable_timestep(two_grains(5e-4, 5e-4), s), std::runtime_error);
+}

@@ -261,6 +261,24 @@ TEST(Yade, RollingFrictionWithTheLinearLawIsRefused) {
   EXPECT_FALSE(fs::exists(dir + "/relax_yade.py"));
 }
 
+// hooke-stiffness is LIGGGHTS-only: YADE refuses it, saying why, before writing anything.
+TEST(Yade, HookeStiffnessIsRefused) {
+  btr::Scene scene = btr_test::make_scene("stiff", 3, container(ContainerKind::Box, 0.02, 0.02));
+  scene.relax.model = "hooke-stiffness";
+  scene.grains.components[0].material.kn = 24.6;
+  scene.grains.components[0].material.kt = 7.0;
+  const btr::Packing p = btr_test::layered_packing(scene, 50, 2);
+  const std::string dir = btr_test::fresh_dir("yade_stiff");
+  try {
+    btr::export_inputs(p, scene, "yade", {}, dir);
+    FAIL() << "expected a refusal";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("LIGGGHTS-only"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("relax.model"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir + "/relax_yade.py"));
+}
+
 // Rolling friction with Hertz-Mindlin: one moment law for all contacts.
 TEST(Yade, RollingFrictionUsesTheMindlinMomentLaw) {
   const btr::Scene scene = btr_test::settling_scene("roll", 3, container(ContainerKind::Open));

@@ -24,6 +24,8 @@ def species_table(scene: dict) -> dict:
                                   "poisson": float(m["poisson"]), "restitution": float(m["restitution"]),
                                   "friction": float(m["friction"]),
                                   "rolling_friction": float(m.get("rolling_friction", 0.0))}
+        for key in ("kn", "kt", "gamma_n", "gamma_t", "wall_gamma_t"):  # hooke-stiffness only
+            out[int(c["species"])][key] = float(m.get(key, 0.0))
     return out
 
 
@@ -64,6 +66,30 @@ def stable_timestep(radius: np.ndarray, species: np.ndarray, scene: dict, fracti
     grain-wall contacts at the ends of each species' radius range. Times fraction.
     Returns (timestep, rule text)."""
     table = species_table(scene)
+    if (scene.get("relax") or {}).get("model", "hertz") == "hooke-stiffness":
+        # explicit stiffness: pi / sqrt(kn/m_eff - (gamma_n/2)^2), pairs (mean kn, gamma_n) and walls (m_eff = m)
+        best, what = math.inf, ""
+        present = [int(s) for s in np.unique(species)]
+        for a in present:
+            ra = radius[species == a]
+            for r1 in (float(ra.min()), float(ra.max())):
+                m1 = table[a]["density"] * 4.0 / 3.0 * math.pi * r1 ** 3
+                cands = [(table[a]["kn"], table[a]["gamma_n"], m1, "wall")]
+                for b in present:
+                    rb = radius[species == b]
+                    for r2 in (float(rb.min()), float(rb.max())):
+                        m2 = table[b]["density"] * 4.0 / 3.0 * math.pi * r2 ** 3
+                        cands.append((0.5 * (table[a]["kn"] + table[b]["kn"]),
+                                      0.5 * (table[a]["gamma_n"] + table[b]["gamma_n"]), m1 * m2 / (m1 + m2), "pair"))
+                for kn, gn, me, label in cands:
+                    w2 = kn / me - 0.25 * gn * gn
+                    if not w2 > 0:
+                        raise ValueError(f"hooke-stiffness: {label} contact overdamped (kn {kn:g}, gamma_n {gn:g})")
+                    t = math.pi / math.sqrt(w2)
+                    if t < best:
+                        best, what = t, f"{label}: kn = {kn:.4g} N/m, m_eff = {me:.4g} kg, gamma_n = {gn:.4g} 1/s"
+        return best * fraction, (f"hooke-stiffness contact time {best:.4g} s ({what}) x {fraction:g} "
+                                 f"= {best * fraction:.4g} s")
     if (scene.get("relax") or {}).get("model", "hertz") == "hooke":
         v = hooke_characteristic_velocity(radius)
         wall = table[int(components(scene)[0]["species"])]

@@ -108,6 +108,12 @@ def _clip_to_container(pts, container: Container, r_max):
     if container.kind == "cylinder":
         keep = np.hypot(pts[:, 0], pts[:, 1]) <= container.radius - 1.05 * r_max
         pts = pts[keep]
+    if container.kind == "hele-shaw":  # a point source's disk of sites reaches past the plates
+        inside_x = np.abs(pts[:, 0]) <= 0.5 * container.size_x - 1.05 * r_max
+        keep = inside_x & (np.abs(pts[:, 1]) <= 0.5 * container.gap - 1.05 * r_max + 1e-12)
+        if not np.any(keep):  # a gap narrower than the lattice spacing: the sites on the mid-plane
+            keep = inside_x & (np.abs(pts[:, 1]) < 1e-12)
+        pts = pts[keep]
     if len(pts) == 0:
         raise PourFailure("pour: no lattice site fits the source inside the container")
     return pts
@@ -196,10 +202,15 @@ def write_inputs(workdir: Path, radius, species, container: Container, scene: di
     """Writes workdir/pour.data and workdir/in.pour; returns a dict of the numbers used."""
     relax = scene.get("relax") or {}
     model = relax.get("model", "hertz")
-    if model not in ("hertz", "hooke"):
-        raise PourFailure(f"pour: scene relax.model: expected hertz or hooke, got {model!r}")
+    if model not in ("hertz", "hooke", "hooke-stiffness"):
+        raise PourFailure(f"pour: scene relax.model: expected hertz, hooke or hooke-stiffness, got {model!r}")
     fraction = settings.timestep_fraction or float(relax.get("timestep_fraction", 0.2))
     dt, rule = dem_params.stable_timestep(radius, species, scene, fraction)
+    if relax.get("timestep") and not settings.timestep_fraction:  # the scene's explicit step, as btr relax takes it
+        if float(relax["timestep"]) > dt / fraction:
+            raise PourFailure(f"pour: scene relax.timestep {relax['timestep']:g} s exceeds the contact time "
+                              f"{dt / fraction:.4g} s ({rule})")
+        dt, rule = float(relax["timestep"]), f"the scene's relax.timestep (stability rule: {rule})"
     stop_ratio = settings.stop_ratio if settings.stop_ratio is not None else float(relax.get("stop_kinetic_ratio", 1e-6))
     settle_max = settings.settle_max_time if settings.settle_max_time is not None else float(relax.get("max_time", 0.2))
     table = dem_params.species_table(scene)
@@ -244,7 +255,7 @@ def write_inputs(workdir: Path, radius, species, container: Container, scene: di
         return " ".join(vals)
 
     rolling = any(m["rolling_friction"] > 0 for m in mats)
-    models = f"model {model} tangential history" + (" rolling_friction epsd2" if rolling else "")
+    models = f"model {'hooke/stiffness' if model == 'hooke-stiffness' else model} tangential history" + (" rolling_friction epsd2" if rolling else "")
     threshold = dem_params.kinetic_threshold(radius, species, scene, stop_ratio)
     g = dem_params.G
     batch_steps = []
@@ -276,6 +287,17 @@ def write_inputs(workdir: Path, radius, species, container: Container, scene: di
     if rolling:
         L.append(f"fix m6 all property/global coefficientRollingFriction peratomtypepair {nt} "
                  f"{per_pair('rolling_friction')}")
+    if model == "hooke-stiffness":  # absolute_damping off: gamman, gammat are rates times m_eff
+        for key, name in (("kn", "kn"), ("kt", "kt"), ("gamma_n", "gamman")):
+            L.append(f"fix s_{name} all property/global {name} peratomtypepair {nt} {per_pair(key)}")
+        vals = []
+        for i in range(nt):
+            for j in range(nt):
+                a, b = mats[i], mats[j]
+                v = (a["wall_gamma_t"] if j == nt - 1 else b["wall_gamma_t"] if i == nt - 1
+                     else 0.5 * (a["gamma_t"] + b["gamma_t"]))
+                vals.append(f"{v:.17g}")
+        L.append(f"fix s_gammat all property/global gammat peratomtypepair {nt} {' '.join(vals)}")
     if model == "hooke":
         L.append("fix m5 all property/global characteristicVelocity scalar "
                  f"{dem_params.hooke_characteristic_velocity(radius):.17g}")

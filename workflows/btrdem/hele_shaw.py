@@ -1,0 +1,310 @@
+"""`hele-shaw`: the angle of repose of heaps poured into granular Hele-Shaw cells (seed 003, Maleki et
+al.), by DEM (LIGGGHTS, the paper's Hooke model: relax.model = "hooke-stiffness"), beside the BTR heap of
+the same grains in the same cell from the same source and that BTR heap after a LIGGGHTS relaxation.
+
+Scene: inputs/hele_shaw_seed003.toml (d = 1 mm), rescaled to each grain diameter d in the paper's units
+(density 2.4 m0/d0^3 kept, kn = 2e3 m g/d, kt = 2/7 kn, gamma_n = 50/t0, walls gamma_t = 50/t0,
+dt = 2e-3 t0, t0 = sqrt(d/g)) and each plate distance w; cell length, height and source position in d.
+
+Steps:
+ 1. theta against N at w = 3 d (seed 003 Fig. 3): DEM pours of N grains; N_sat is the smallest N whose
+    angle is within 1 degree of the largest N's.
+ 2. for each grain size and each w/d: N = N_sat w / (3 d) grains (the heap's length in d then stays
+    about the same), BTR deposit, DEM pour (btrdem.pour, released in batches at `pace`: the pour rate),
+    BTR + LIGGGHTS relaxation (`btr relax`); each measured with `btr measure` (heap flank angle, mean
+    coordination over all grains).
+ 3. Eq. 9 theta_r(w) = theta_inf (1 - alpha exp(-w/l)) fitted to the DEM angles of each size and of all
+    sizes together (scipy curve_fit; 1-sigma errors from the covariance).
+Every (case, method) is a row; a failure is a row with its reason. report.md, hele_shaw.csv, PNGs and
+run.json are rewritten after every row."""
+from __future__ import annotations
+
+import copy
+import csv
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from . import btr_cli, measures, report
+from .io import atomic_write_text, read_packing, read_scene_toml, write_scene_toml
+from .pour import PourSettings, pour
+from .runner import REPO, RunRecord, StepFailed, find_btr
+
+G = 9.81
+D_REF = 1.0e-3  # the base scene's grain diameter
+BASE = REPO / "inputs" / "hele_shaw_seed003.toml"
+
+FULL = {"n_values": [250, 500, 1000, 2000, 4000], "widths": [1.5, 2, 3, 4, 5, 6, 8, 10],
+        "sizes_mm": [1.0, 2.0], "second_size_widths": [1.5, 2, 3, 4, 6, 8, 10], "length_d": 80, "height_d": 60}
+REDUCED = {"n_values": [200, 400, 800, 1600], "widths": [1.5, 2, 3, 5, 7, 10], "sizes_mm": [1.0, 2.0],
+           "second_size_widths": [1.5, 3, 7], "length_d": 70, "height_d": 50}
+TINY = {"n_values": [120], "widths": [3], "sizes_mm": [1.0], "second_size_widths": [], "length_d": 24,
+        "height_d": 20, "n_fixed": 120, "max_time": 0.3}
+
+METHODS = ("dem", "btr", "btr+relax")
+
+
+def paper_material(d: float, density: float) -> dict:
+    """Seed 003 Table I in SI for grains of diameter d [m]."""
+    m = density * math.pi / 6.0 * d ** 3
+    t0 = math.sqrt(d / G)
+    kn = 2.0e3 * m * G / d
+    return {"kn": kn, "kt": 2.0 / 7.0 * kn, "gamma_n": 50.0 / t0, "gamma_t": 0.0, "wall_gamma_t": 50.0 / t0,
+            "timestep": 2.0e-3 * t0}
+
+
+def cell_scene(base: dict, d: float, w_d: float, n: int, size: dict, seed: int) -> dict:
+    s = copy.deepcopy(base)
+    density = float(s["grains"]["density"])
+    mat = paper_material(d, density)
+    s["scene"]["name"] = f"hs_d{d * 1e3:g}mm_w{w_d:g}d_n{n}"
+    s["scene"]["seed"] = seed
+    s["grains"]["count"] = int(n)
+    s["grains"]["radius"] = {"distribution": "constant", "value": 0.5 * d}
+    length = size["length_d"] * d
+    s["container"]["size"] = [length]
+    s["container"]["gap"] = w_d * d
+    s["container"]["height"] = size["height_d"] * d
+    scatter = max(0.0, min(1.0, 0.5 * (w_d - 1.0) - 0.02)) * d  # drops keep inside the plates
+    s["source"]["position"] = [-0.5 * length + 1.5 * d + scatter, 0.0]
+    s["source"]["scatter"] = scatter
+    for k in ("kn", "kt", "gamma_n", "gamma_t", "wall_gamma_t"):
+        s["material"][k] = mat[k]
+    s["relax"]["timestep"] = mat["timestep"]
+    if "max_time" in size:
+        s["relax"]["max_time"] = size["max_time"]
+    return s
+
+
+def _measure(csv_path) -> dict:
+    m = measures.measure(csv_path)
+    h = m.get("heap") or {}
+    return {"theta": h.get("angle_of_repose_deg"), "z_mean": m.get("mean_coordination_all_grains"),
+            "heap_note": h.get("note", ""), "profile": h.get("profile")}
+
+
+def _run_case(btr, case_dir: Path, scene: dict, methods, pace: float, progress) -> dict:
+    """Runs the methods of one cell; yields per-method results as a dict method -> (fn) for rec.case."""
+    case_dir.mkdir(parents=True, exist_ok=True)
+    scene_path = case_dir / "scene.toml"
+    write_scene_toml(scene_path, scene)
+    steps = {}
+
+    def btr_step():
+        t = time.monotonic()
+        dep = btr_cli.deposit(btr, str(scene_path), case_dir / "btr", name="btr", progress=progress)
+        return dep["csv"], time.monotonic() - t
+
+    state = {}
+
+    def get_btr():
+        if "btr" not in state:
+            state["btr"] = btr_step()
+        return state["btr"]
+
+    def dem():
+        # The pour needs the grains (radii, scene) only, not BTR's positions: if BTR's own deposit
+        # failed, the grains of a deposit with another seed stand in, so the DEM row is not lost.
+        try:
+            csv_path, _ = get_btr()
+        except StepFailed as e:
+            csv_path = None
+            for k in range(1, 4):
+                try:
+                    csv_path = btr_cli.deposit(btr, str(scene_path), case_dir / f"dem_grains_seed{k}", name="btr",
+                                               seed=int(scene["scene"]["seed"]) + 1000 * k, progress=progress)["csv"]
+                    progress(f"  BTR deposit failed ({str(e).splitlines()[0][:80]}); DEM takes the grains of seed "
+                             f"+{1000 * k}")
+                    break
+                except StepFailed:
+                    continue
+            if csv_path is None:
+                raise
+        summary = pour(read_packing(csv_path), case_dir / "dem",
+                       PourSettings(pace=pace, max_batches=20, label="pour " + scene["scene"]["name"]),
+                       progress=progress)
+        return summary["packing"], summary["wall_seconds"]
+
+    def btr_only():
+        return get_btr()
+
+    def relaxed():
+        csv_path, t_btr = get_btr()
+        r = btr_cli.relax(btr, csv_path, "liggghts", case_dir / "relax", progress=progress)
+        return r["csv"], t_btr + r["wall_seconds"]
+
+    steps = {"dem": dem, "btr": btr_only, "btr+relax": relaxed}
+    return {m: steps[m] for m in methods}
+
+
+def fit_eq9(w_d, theta):
+    """theta_inf, alpha, l (in d) and their 1-sigma errors, or None with a reason."""
+    from scipy.optimize import curve_fit
+    w_d, theta = np.asarray(w_d, float), np.asarray(theta, float)
+    if len(w_d) < 4:
+        return None, f"{len(w_d)} points: Eq. 9 has 3 parameters, at least 4 needed"
+
+    def f(w, th, a, l):
+        return th * (1.0 - a * np.exp(-w / l))
+    try:
+        p, cov = curve_fit(f, w_d, theta, p0=[float(np.min(theta)), -0.3, 2.0], maxfev=20000)
+    except Exception as e:  # noqa: BLE001 - a fit that does not converge is reported, not fatal
+        return None, f"no convergence ({e})"
+    err = np.sqrt(np.diag(cov)) if np.all(np.isfinite(cov)) else [float("nan")] * 3
+    return {"theta_inf": p[0], "alpha": p[1], "l_d": p[2], "theta_inf_err": err[0], "alpha_err": err[1],
+            "l_d_err": err[2], "rms_deg": float(np.sqrt(np.mean((f(w_d, *p) - theta) ** 2))), "points": len(w_d)}, ""
+
+
+FIELDS = ["stage", "d_mm", "w_d", "n", "method", "theta_deg", "z_mean", "wall_s", "status", "reason", "heap_note"]
+
+
+def _write_tables(out: Path, rows: list, fits: dict, n_sat, settings: dict):
+    lines = [",".join(FIELDS)]
+    for r in rows:
+        lines.append(",".join(str(r.get(k, "")).replace(",", ";") for k in FIELDS))
+    atomic_write_text(out / "hele_shaw.csv", "\n".join(lines) + "\n")
+    ok = [r for r in rows if r["status"] == "ok" and r.get("theta_deg") is not None]
+    # figures
+    nrows = [r for r in ok if r["stage"] == "theta-vs-N"]
+    if nrows:
+        report.curves(out / "theta_vs_n.png", [("DEM, w = 3 d", [r["n"] for r in nrows],
+                                                 [r["theta_deg"] for r in nrows])],
+                      "grains N", "angle of repose [deg]", "theta against N (seed 003 Fig. 3)")
+    wrows = [r for r in ok if r["stage"] == "width"]
+    series, zseries = [], []
+    for d in sorted({r["d_mm"] for r in wrows}):
+        for m in METHODS:
+            sel = sorted((r for r in wrows if r["d_mm"] == d and r["method"] == m), key=lambda r: r["w_d"])
+            if sel:
+                series.append((f"{m}, d = {d:g} mm", [r["w_d"] for r in sel], [r["theta_deg"] for r in sel]))
+                zseries.append((f"{m}, d = {d:g} mm", [r["w_d"] for r in sel], [r["z_mean"] for r in sel]))
+    fit = (fits.get("all") or (None, ""))[0]
+    if fit:
+        ww = np.linspace(1.0, 10.5, 100)
+        series.append(("Eq. 9 fit (DEM, all d)", ww, fit["theta_inf"] * (1 - fit["alpha"] * np.exp(-ww / fit["l_d"]))))
+    if series:
+        styles = {lab: {"marker": "o" if lab.startswith("dem") else "s" if lab.startswith("btr,") else "^",
+                        "linestyle": "--" if "2 mm" in lab else "-"} for lab, _, _ in series}
+        styles.update({"Eq. 9 fit (DEM, all d)": {"color": "k", "linestyle": ":"}})
+        report.curves(out / "theta_vs_w.png", series, "w / d", "angle of repose [deg]",
+                      "theta_r against w/d (seed 003 Figs. 6, 9)", styles=styles)
+        report.curves(out / "coordination_vs_w.png", zseries, "w / d", "mean coordination (all grains)",
+                      "mean coordination against w/d (seed 003 Fig. 8)", styles=styles)
+    # report
+    md = ["# Hele-Shaw heaps: DEM (seed 003 model) vs BTR vs BTR + relaxation", "",
+          f"Settings: {settings}", "",
+          "Angles: `btr measure` heap flank (least squares between 20 % and 80 % of the heap height, the side "
+          "away from the end wall); coordination: mean over all grains (gap < contact tolerance).", ""]
+    if n_sat is not None:
+        md += [f"N_sat (smallest N within 1 deg of the largest N's angle, w = 3 d): **{n_sat}**", ""]
+    md += ["| stage | d [mm] | w/d | N | method | theta [deg] | z mean | wall [s] | status | reason |",
+           "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        md.append(f"| {r['stage']} | {r['d_mm']:g} | {r['w_d']:g} | {r['n']} | {r['method']} | "
+                  f"{report.fmt(r.get('theta_deg'))} | {report.fmt(r.get('z_mean'))} | {report.fmt(r.get('wall_s'), 3)} "
+                  f"| {r['status']} | {r.get('reason', '')} |")
+    md += ["", "## Eq. 9 fits to the DEM angles", ""]
+    for key, (fit, why) in fits.items():
+        if fit:
+            md.append(f"- {key}: theta_inf = {fit['theta_inf']:.2f} +- {fit['theta_inf_err']:.2f} deg, "
+                      f"alpha = {fit['alpha']:.3f} +- {fit['alpha_err']:.3f}, l = {fit['l_d']:.2f} +- "
+                      f"{fit['l_d_err']:.2f} d (rms {fit['rms_deg']:.2f} deg, {fit['points']} points)")
+        else:
+            md.append(f"- {key}: not fitted: {why}")
+    md += ["", "Figures: theta_vs_n.png, theta_vs_w.png, coordination_vs_w.png, profiles.png", ""]
+    atomic_write_text(out / "report.md", "\n".join(md) + "\n")
+
+
+def _fits(rows):
+    out = {}
+    dem = [r for r in rows if r["stage"] == "width" and r["method"] == "dem" and r["status"] == "ok"
+           and r.get("theta_deg") is not None]
+    for d in sorted({r["d_mm"] for r in dem}):
+        sel = [r for r in dem if r["d_mm"] == d]
+        fit, why = fit_eq9([r["w_d"] for r in sel], [r["theta_deg"] for r in sel])
+        out[f"d = {d:g} mm"] = (fit, why)
+    if dem:
+        fit, why = fit_eq9([r["w_d"] for r in dem], [r["theta_deg"] for r in dem])
+        out["all"] = (fit, why)
+    return out
+
+
+def _profiles_figure(out: Path, profiles: dict):
+    if not profiles:
+        return
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for label, (d, prof) in profiles.items():
+        ax.plot(np.asarray(prof["coord"]) / d, np.asarray(prof["height"]) / d, label=label)
+    ax.set_xlabel("x - source x [d]")
+    ax.set_ylabel("surface height [d]")
+    ax.set_title("free-surface profiles")
+    ax.legend(fontsize=7)
+    report.save_figure(fig, out / "profiles.png")
+
+
+def run_hele_shaw(outdir, reduced: bool = False, tiny: bool = False, pace: float = 1.0, seed: int = 1,
+                  progress=print, n_override: int | None = None) -> dict:
+    size = TINY if tiny else REDUCED if reduced else FULL
+    out = Path(outdir or "out/hele_shaw").resolve()
+    btr = find_btr()
+    base = read_scene_toml(BASE)
+    settings = {"mode": "tiny" if tiny else "reduced" if reduced else "full", "pace": pace, "seed": seed, **size}
+    rec = RunRecord(out, "hele-shaw", inputs=[str(BASE)], btr=btr, progress=progress, settings=settings)
+    rows, fits, profiles = [], {}, {}
+    n_sat = [n_override or size.get("n_fixed")]
+
+    def on_row(_rows):
+        nonlocal fits
+        fits = _fits(rows)
+        _write_tables(out, rows, fits, n_sat[0], settings)
+        _profiles_figure(out, profiles)
+
+    def run_method(stage, d_mm, w_d, n, method, fn, case_dir):
+        row = {"stage": stage, "d_mm": d_mm, "w_d": w_d, "n": n, "method": method}
+        with rec.case(f"{stage} d={d_mm:g}mm w={w_d:g}d N={n} {method}", rows, row, on_row):
+            csv_path, wall = fn()
+            row["wall_s"] = wall
+            m = _measure(csv_path)
+            row.update(theta_deg=m["theta"], z_mean=m["z_mean"], heap_note=m["heap_note"])
+            if m["theta"] is None:
+                raise RuntimeError(f"heap angle not measured: {m['heap_note']}")
+            if stage == "width" and d_mm == size["sizes_mm"][0] and w_d in (min(size["widths"]), max(size["widths"])):
+                profiles[f"{method}, w = {w_d:g} d"] = (d_mm * 1e-3, m["profile"])
+        return row
+
+    # 1. theta against N
+    if n_sat[0] is None:
+        for n in size["n_values"]:
+            scene = cell_scene(base, D_REF, 3.0, n, size, seed)
+            fns = _run_case(btr, out / "cases" / f"N{n}", scene, ("dem",), pace, progress)
+            run_method("theta-vs-N", 1.0, 3.0, n, "dem", fns["dem"], None)
+        good = [r for r in rows if r["stage"] == "theta-vs-N" and r["status"] == "ok"]
+        if good:
+            ref = max(good, key=lambda r: r["n"])["theta_deg"]
+            n_sat[0] = min(r["n"] for r in good if abs(r["theta_deg"] - ref) <= 1.0)
+        else:
+            n_sat[0] = size["n_values"][-1]
+            progress(f"no theta-vs-N case succeeded; using N = {n_sat[0]}")
+        rec.data["n_sat"] = n_sat[0]
+        on_row(rows)
+    # 2. widths and sizes
+    for d_mm in size["sizes_mm"]:
+        widths = size["widths"] if d_mm == size["sizes_mm"][0] else size["second_size_widths"]
+        for w_d in widths:
+            n = max(20, int(round(n_sat[0] * max(w_d, 1.5) / 3.0))) if not tiny else n_sat[0]
+            scene = cell_scene(base, d_mm * 1e-3, w_d, n, size, seed)
+            fns = _run_case(btr, out / "cases" / f"d{d_mm:g}mm_w{w_d:g}", scene, METHODS, pace, progress)
+            for method in METHODS:
+                run_method("width", d_mm, w_d, n, method, fns[method], None)
+    fits = _fits(rows)
+    on_row(rows)
+    summary = {"rows": len(rows), "failed": sum(r["status"] != "ok" for r in rows), "n_sat": n_sat[0],
+               "fits": {k: v[0] for k, v in fits.items()}}
+    rec.finish(summary)
+    progress(f"hele-shaw: {summary['rows']} rows ({summary['failed']} failed); report {out / 'report.md'}")
+    return {"rows": rows, "fits": fits, "n_sat": n_sat[0], "out": str(out)}
