@@ -160,7 +160,7 @@ class Placer {
     u = active.empty() ? a : VecX(a + Ct * lambda);
     std::vector<std::int64_t> loaded;
     for (std::size_t i = 0; i < active.size(); ++i)
-      if (lambda(i) > 1e-12) loaded.push_back(active[i]->o.key * 64 + active[i]->member);
+      if (lambda(i) > 1e-12) loaded.push_back(active[i]->o.key * (std::int64_t(1) << 20) + active[i]->member);
     return loaded;
   }
   bool lifts_off(const std::vector<std::int64_t>& before) {
@@ -233,7 +233,7 @@ void Placer::project(const std::vector<std::int64_t>& loaded) {
     double worst = 0.0;
     for (const Contact& c : cand_) {
       const bool is_loaded =
-          std::find(loaded.begin(), loaded.end(), c.o.key * 64 + c.member) != loaded.end();
+          std::find(loaded.begin(), loaded.end(), c.o.key * (std::int64_t(1) << 20) + c.member) != loaded.end();
       if (is_loaded || c.gap < 0.0) {
         set.push_back(&c);
         worst = std::max(worst, std::abs(c.gap));
