@@ -25,6 +25,11 @@ namespace btr {
 namespace {
 
 using VecX = Eigen::VectorXd;
+
+// Obstacles nearer than this (times the smallest member radius) count as contacts of the descent: a
+// contact that a grazing motion approaches only slowly is taken as closed (a loaded one is then closed
+// exactly by the Newton projection) instead of being approached in ever shorter steps.
+constexpr double kContactTol = 1e-6;
 using MatX = Eigen::MatrixXd;
 
 // Lawson-Hanson non-negative least squares: argmin |A x - b| over x >= 0.
@@ -147,7 +152,7 @@ class Placer {
   // squares). Returns the loaded contacts' keys (obstacle key * 64 + member).
   std::vector<std::int64_t> descend(VecX& u) {
     refresh_gaps();
-    const double contact_tol = 1e-9 * r_min_;
+    const double contact_tol = kContactTol * r_min_;
     std::vector<const Contact*> active;
     for (const Contact& c : cand_)
       if (c.gap <= contact_tol) active.push_back(&c);
@@ -275,11 +280,18 @@ void Placer::run(const ClusterDrop& drop) {
     if (!misfit.empty()) fail("dropped outside the container: member " + std::to_string(k + 1) + ": " + misfit);
   }
 
-  const double contact_tol = 1e-9 * r_min_;
+  const double contact_tol = kContactTol * r_min_;
   const long budget = 20L * e_.max_events;
   double h = h_max_;
   bool rest = false;
+  double z_window = std::numeric_limits<double>::infinity();  // G's height at the start of a window of steps
   for (long step = 0; step < budget && !rest; ++step) {
+    // Creeping: the centre of mass went down less than 1e-10 r in 500 steps (a wedge the steps cannot
+    // resolve, each step cut short by a contact about to close): at rest, by rule.
+    if (step % 500 == 0) {
+      if (z_window - G_.z() < 1e-10 * r_min_) { rest = true; break; }
+      z_window = G_.z();
+    }
     gather(h_max_);
     bool touching = false;
     for (const Contact& c : cand_) touching |= c.gap <= contact_tol;
@@ -289,7 +301,11 @@ void Placer::run(const ClusterDrop& drop) {
     }
     VecX u;
     const std::vector<std::int64_t> loaded = descend(u);
-    if (u.norm() <= 1e-9) { rest = true; break; }
+    if (u.norm() <= 1e-9) {
+      project(loaded);  // loaded contacts within kContactTol closed exactly
+      rest = true;
+      break;
+    }
 
     // Step length s along u: members move at most h (and the cluster turns at most 0.1 rad), and no
     // member reaches an obstacle it does not touch (conservative advancement).

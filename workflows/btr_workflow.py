@@ -8,6 +8,7 @@
   stability [-o OUTDIR] [--tiny]          relaxation stability sweep in each engine
   brazil-nut [-o OUTDIR] [--tiny]         intruder rise under dynamic BTR shaking, Phi sweep, 3D and 2D
   drum [-o OUTDIR] [--revolutions N]      segregation and dynamic angle in a rotating drum (2D, 3D)
+  nano-powder [-o OUTDIR] [--cycles N]     rigid clusters redeposited: <h> = a - b exp(-n/tau) (2D, 3D)
 
 The `btr` program is $BTR_BINARY, else build/app/btr. Exit status: 0 done, 2 bad input, 3 a step failed
 (its error is printed and recorded in OUTDIR/run.json; what earlier steps wrote is kept)."""
@@ -108,6 +109,11 @@ def main(argv=None) -> int:
     dr.add_argument("--revolutions", type=float, default=3.0)
     dr.add_argument("--tiny", action="store_true", help="300 grains, 20 steps per revolution, one revolution")
 
+    nano = sub.add_parser("nano-powder", help="rigid clusters redeposited (btr redeposit): fit <h> = a - b exp(-n/tau)")
+    nano.add_argument("-o", "--out", help="output folder (default out/nano_powder)")
+    nano.add_argument("--cycles", type=int, default=12)
+    nano.add_argument("--tiny", action="store_true", help="a few hundred grains, for tests")
+
     args = ap.parse_args(argv)
     try:
         if args.command == "compare":
@@ -160,6 +166,11 @@ def main(argv=None) -> int:
             if not args.revolutions > 0:
                 raise InputError(f"--revolutions: expected a positive number, got {args.revolutions}")
             run_drum(args.out, args.revolutions, args.tiny, progress)
+        elif args.command == "nano-powder":
+            from btrdem.nano_powder import run_nano_powder
+            if args.cycles < 3:
+                raise InputError(f"--cycles: expected at least 3 cycles to fit, got {args.cycles}")
+            run_nano_powder(args.out, args.cycles, args.tiny, progress)
     except InputError as e:
         print(f"btr_workflow.py {args.command}: {e}", file=sys.stderr)
         return 2
