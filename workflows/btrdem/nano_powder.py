@@ -123,8 +123,9 @@ class Study:
 
     def report_text(self) -> str:
         out = ["# Nano-powder coarsening by redeposition of rigid clusters", "",
-               "Per case: `btr redeposit --check` (status check-failed: some cycle had clusters the independent check
-found unsupported or overlapping; the reason column quotes it) (initial clusters of 3, then per cycle blocks of `block_d` mean "
+               "Per case: `btr redeposit --check` (status check-failed: some cycle had clusters the independent "
+               "check found unsupported or overlapping; the reason column quotes it) (initial clusters of 3, "
+               "then per cycle blocks of `block_d` mean "
                "diameters split into clusters of touching grains and dropped again). <h>: strips one mean "
                "diameter wide, top of the highest grain of each, averaged (in mean diameters). Fit of "
                "<h> = a - b exp(-n/tau) over cycles n >= 1, errors one standard deviation from curve_fit's "
