@@ -44,25 +44,43 @@ void wall_touches(const Grain& g, std::size_t i, int dimension, const Container&
   }
 }
 
-// Is e_z (the weight, carried) a non-negative combination of the wrench columns? Enumerates subsets.
+// Is e_z (the weight, carried) a non-negative combination of the wrench columns? Up to 14 contacts:
+// enumerates the subsets of at most d columns with least squares. More: accelerated projected gradient
+// (FISTA) on |A x - b|^2 over x >= 0 (enumeration would take too long).
 bool carried(const std::vector<Eigen::VectorXd>& wrenches, int d) {
   const int k = static_cast<int>(wrenches.size());
   Eigen::VectorXd b = Eigen::VectorXd::Zero(d);
   b(d == 6 ? 2 : 1) = 1.0;
-  const int m = std::min(k, 14);  // more contacts than this: the first 14 (a stricter test)
+  constexpr double kResidual = 1e-6;
+  if (k > 14) {
+    Eigen::MatrixXd A(d, k);
+    for (int i = 0; i < k; ++i) A.col(i) = wrenches[i];
+    const double L = (A.transpose() * A).eigenvalues().real().maxCoeff();
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(k), y = x, prev = x;
+    double t = 1.0;
+    for (int it = 0; it < 200000; ++it) {
+      prev = x;
+      x = (y - A.transpose() * (A * y - b) / L).cwiseMax(0.0);
+      if ((A * x - b).norm() <= kResidual) return true;
+      const double t_next = 0.5 * (1.0 + std::sqrt(1.0 + 4.0 * t * t));
+      y = x + ((t - 1.0) / t_next) * (x - prev);
+      t = t_next;
+    }
+    return false;
+  }
   std::vector<int> pick;
   bool found = false;
-  // All subsets of size 1..d of the first m columns.
+  // All subsets of size 1..d.
   std::function<void(int)> rec = [&](int start) {
     if (found) return;
     if (!pick.empty()) {
       Eigen::MatrixXd A(d, static_cast<Eigen::Index>(pick.size()));
       for (std::size_t a = 0; a < pick.size(); ++a) A.col(a) = wrenches[pick[a]];
       const Eigen::VectorXd x = A.colPivHouseholderQr().solve(b);
-      if ((A * x - b).norm() <= 1e-6 && x.minCoeff() >= -1e-9) { found = true; return; }
+      if ((A * x - b).norm() <= kResidual && x.minCoeff() >= -1e-9) { found = true; return; }
     }
     if (static_cast<int>(pick.size()) == d) return;
-    for (int i = start; i < m && !found; ++i) {
+    for (int i = start; i < k && !found; ++i) {
       pick.push_back(i);
       rec(i + 1);
       pick.pop_back();

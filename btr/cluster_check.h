@@ -2,7 +2,8 @@
 // Self-check of a packing of rigid clusters, written apart from the placement code: contacts are
 // found by brute force over sorted grains, and support is decided by enumerating the contact subsets
 // (Caratheodory: a wrench in the cone of k wrenches is in the cone of at most 6 independent ones),
-// not by the placement's non-negative least squares.
+// (more than 14 contacts: an accelerated projected gradient), not by the placement's non-negative
+// least squares.
 #include <cstdint>
 #include <vector>
 

@@ -184,6 +184,25 @@ TEST(Clusters, CheckCatchesBrokenPackings) {
   EXPECT_GT(check_clusters(sunk, 3, c).overlaps, 0);
 }
 
+// More than 14 contacts (the check's projected-gradient branch): a vertical column of 16 disks, one
+// cluster, each member touching the wall x = -2: supported when it stands on the floor, not when lifted.
+TEST(Clusters, CheckWithManyContacts) {
+  const Container c = box(4, 4);
+  Grains column;
+  for (int k = 0; k < 16; ++k) {
+    Grain g;
+    g.x = Vec3(-1.5, 0.0, 0.5 + k);
+    g.r = 0.5;
+    g.cluster = 1;
+    column.push_back(g);
+  }
+  EXPECT_TRUE(check_clusters(column, 2, c).ok());
+  for (Grain& g : column) g.x.z() += 0.01;
+  const ClusterCheckReport lifted = check_clusters(column, 2, c);
+  EXPECT_EQ(lifted.unsupported, 1);
+  EXPECT_EQ(lifted.overlaps, 0);
+}
+
 // A one-grain cluster follows the same physics as a grain: both engines give the same packing.
 TEST(Clusters, SingleGrainClustersMatchTheGrainEngine) {
   const Container c = box(5, 5);
