@@ -322,11 +322,38 @@ void Placer::run(const ClusterDrop& drop) {
     }
     double s = h / fastest;
     if (w.norm() > 0.0) s = std::min(s, 0.1 / w.norm());
-    for (const Contact& c : cand_)
-      if (c.gap > contact_tol) s = std::min(s, c.gap / speed[c.member]);
+    std::vector<double> gap0;
+    double s_safe = s;
+    for (const Contact& c : cand_) {
+      gap0.push_back(c.gap);
+      if (c.gap > contact_tol) s_safe = std::min(s_safe, c.gap / speed[c.member]);
+    }
 
     const Vec3 G0 = G_;
     const Eigen::Quaterniond q0 = q_;
+    // Does the step of length t bring a member into an obstacle it did not touch?
+    auto enters = [&](double t) {
+      G_ = G0;
+      q_ = q0;
+      move(u, t);
+      refresh_gaps();
+      for (std::size_t i = 0; i < cand_.size(); ++i)
+        if (gap0[i] > contact_tol && cand_[i].gap < 0.0) return true;
+      return false;
+    };
+    // Conservative advancement gives the step no member can close a gap in; when that is shorter than
+    // the full step (a gap passed at a grazing angle), try the full step and, if it enters an
+    // obstacle, bisect to the first touch instead of creeping along in ever shorter safe steps.
+    if (s_safe < s && enters(s)) {
+      double lo = s_safe, hi = s;
+      for (int it = 0; it < 60 && (hi - lo) * fastest > 1e-3 * contact_tol; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (enters(mid) ? hi : lo) = mid;
+      }
+      s = lo;
+    }
+    G_ = G0;
+    q_ = q0;
     move(u, s);
     project(loaded);
     // A support that unloads within the step: go back to just past the point where it does (to a
