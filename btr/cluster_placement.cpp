@@ -373,7 +373,12 @@ void Placer::run(const ClusterDrop& drop) {
       move(u, hi);
       project(loaded);
     }
-    if (!(G_.z() < G0.z())) {
+    // A step after which the projection leaves a member inside an obstacle (closing the loaded contacts
+    // and opening the others is inconsistent there) is refused like one that does not go down.
+    bool overlapping = false;
+    refresh_gaps();
+    for (const Contact& c : cand_) overlapping |= c.gap < -1e-10 * r_min_;
+    if (overlapping || !(G_.z() < G0.z())) {
       G_ = G0;
       q_ = q0;
       h *= 0.5;
