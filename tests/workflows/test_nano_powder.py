@@ -17,6 +17,15 @@ def test_fit_recovers_known_parameters_with_honest_errors():
         assert 0 < f[key + "_err"] < 0.1 * abs(true)
 
 
+def test_fit_flags_data_without_saturation():
+    rng = np.random.default_rng(5)
+    n = np.arange(1, 13, dtype=float)
+    flat = 115.0 + rng.normal(0.0, 5.0, n.size)
+    flat[0] += 10.0  # one high first point: curve_fit drives tau to its bound
+    assert not fit_saturation(n, flat)["determined"]
+    assert fit_saturation(n, saturating(n, 34.0, 7.0, 3.0) + rng.normal(0, 0.2, n.size))["determined"]
+
+
 def test_fit_refuses_too_few_cycles():
     with pytest.raises(ValueError, match="at least 3 cycles"):
         fit_saturation([1, 2], [1.0, 2.0])

@@ -41,8 +41,12 @@ def fit_saturation(n, h) -> dict:
     popt, pcov = curve_fit(saturating, n, h, p0=(a0, b0, max(1.0, float(n.max() - n.min()) / 3.0)),
                            bounds=([-np.inf, -np.inf, 1e-3], [np.inf, np.inf, 1e4]), maxfev=20000)
     err = np.sqrt(np.diag(pcov)) if len(n) > 3 and np.all(np.isfinite(pcov)) else np.full(3, np.nan)
+    # tau shorter than half the cycle spacing (the exponential is gone by the first fitted cycle) or
+    # less than its own error: the data show no approach to saturation, so b and tau mean nothing.
+    spacing = float(np.min(np.diff(np.unique(n)))) if len(np.unique(n)) > 1 else 1.0
+    determined = bool(popt[2] > 0.5 * spacing and np.isfinite(err[2]) and err[2] < popt[2])
     return {"a": float(popt[0]), "b": float(popt[1]), "tau": float(popt[2]),
-            "a_err": float(err[0]), "b_err": float(err[1]), "tau_err": float(err[2])}
+            "a_err": float(err[0]), "b_err": float(err[1]), "tau_err": float(err[2]), "determined": determined}
 
 
 def read_cycles(path) -> dict:
@@ -98,7 +102,7 @@ class Study:
 
     def write_outputs(self):
         keys = ["case", "dimension", "grains", "block_d", "cycles", "status", "reason", "h0_d", "h_last_d",
-                "phi_last", "mean_cluster_last", "a", "a_err", "b", "b_err", "tau", "tau_err", "seconds"]
+                "phi_last", "mean_cluster_last", "a", "a_err", "b", "b_err", "tau", "tau_err", "determined", "seconds"]
         lines = [",".join(keys)] + [",".join("" if r.get(k) is None else str(r.get(k)).replace(",", ";")
                                              for k in keys) for r in self.rows]
         atomic_write_text(self.out / "nano_powder.csv", "\n".join(lines) + "\n")
@@ -111,7 +115,7 @@ class Study:
         for name, t in self.series.items():
             line, = ax.plot(t["cycle"], t["mean_height_d"], "D", label=f"{name}: measured")
             row = next(r for r in self.rows if r["case"] == name)
-            if "tau" in row:
+            if row.get("determined"):
                 n = np.linspace(1, t["cycle"].max(), 200)
                 ax.plot(n, saturating(n, row["a"], row["b"], row["tau"]), "-", color=line.get_color(),
                         label=f"{name}: {row['a']:.3g} - {row['b']:.3g} exp(-n/{row['tau']:.3g})")
@@ -135,8 +139,10 @@ class Study:
                  report.fmt(r.get("h0_d")), report.fmt(r.get("h_last_d")), report.fmt(r.get("phi_last")),
                  report.fmt(r.get("mean_cluster_last")),
                  f"{report.fmt(r.get('a'))} ± {report.fmt(r.get('a_err'))}" if "a" in r else "",
-                 f"{report.fmt(r.get('b'))} ± {report.fmt(r.get('b_err'))}" if "b" in r else "",
-                 f"{report.fmt(r.get('tau'))} ± {report.fmt(r.get('tau_err'))}" if "tau" in r else "",
+                 (f"{report.fmt(r.get('b'))} ± {report.fmt(r.get('b_err'))}" if r.get("determined")
+                  else "not determined" if "b" in r else ""),
+                 (f"{report.fmt(r.get('tau'))} ± {report.fmt(r.get('tau_err'))}" if r.get("determined")
+                  else "not determined" if "tau" in r else ""),
                  report.fmt(r.get("seconds")), r.get("reason") or ""] for r in self.rows]
         out.append(report.md_table(["case", "dim", "grains", "block [d]", "cycles", "status", "<h> at n=0",
                                     "<h> last", "phi last", "mean cluster last", "a", "b", "tau", "seconds",
