@@ -18,5 +18,6 @@ Runner add_export_command(CLI::App& app);
 Runner add_measure_command(CLI::App& app);
 Runner add_shake_command(CLI::App& app);
 Runner add_drum_command(CLI::App& app);
+Runner add_redeposit_command(CLI::App& app);
 
 }  // namespace btr_app

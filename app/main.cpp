@@ -1,4 +1,4 @@
-// The `btr` program: deposit, bench, relax, export, measure, shake, drum.
+// The `btr` program: deposit, bench, relax, export, measure, shake, drum, redeposit.
 #include <iostream>
 
 #include "commands.h"
@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   remember(btr_app::add_export_command(app));
   remember(btr_app::add_measure_command(app));
   remember(btr_app::add_shake_command(app));
+  remember(btr_app::add_redeposit_command(app));
   remember(btr_app::add_drum_command(app));
 
   try {

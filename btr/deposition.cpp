@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "btr/circle_arc.h"
+#include "btr/cluster_placement.h"
 #include "btr/descent.h"
 #include "btr/neighbour_grid.h"
 #include "btr/obstacle.h"
@@ -75,6 +76,7 @@ struct Deposition::Impl {
   Grains grains;
   NeighbourGrid grid;
   double top = 0.0;  // highest grain top so far
+  std::int32_t clusters = 0;  // rigid clusters placed so far
   std::vector<Obstacle> walls;  // the container as obstacles for the grain being placed (reused)
 
   Impl(int dim, const Container& c, double rmax, int events)
@@ -724,6 +726,11 @@ Deposition::Deposition(int dimension, const Container& container, double r_max, 
 }
 Deposition::~Deposition() = default;
 const Grain& Deposition::place(const Drop& drop) { return impl_->place(drop); }
+std::int32_t Deposition::place_cluster(const ClusterDrop& drop) {
+  Impl& d = *impl_;
+  ClusterEngine engine{d.dimension, d.container, d.r_max, d.max_events, d.grains, d.grid, d.top, d.clusters};
+  return place_rigid_cluster(engine, drop);
+}
 const Grains& Deposition::grains() const { return impl_->grains; }
 Grains Deposition::release() {
   Grains out = std::move(impl_->grains);

@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "cluster.h"
 #include "container.h"
 #include "grain.h"
 
@@ -44,6 +45,9 @@ class Deposition {
 
   // Places one grain and returns it as fixed (its id is grains().size()). Throws PlacementError.
   const Grain& place(const Drop& drop);
+  // Places one rigid cluster (btr/cluster_placement.cpp) and returns its number (1, 2, ...), which its
+  // members carry as Grain::cluster. Throws PlacementError naming the cluster.
+  std::int32_t place_cluster(const ClusterDrop& drop);
 
   const Grains& grains() const;
   // Hands the placed grains over (the engine is empty afterwards); saves a copy of a large packing.

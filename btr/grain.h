@@ -1,6 +1,7 @@
 #pragma once
 // The grains of a packing: the one data structure every stage shares.
 #include <Eigen/Core>
+#include <cstdint>
 #include <vector>
 
 namespace btr {
@@ -12,6 +13,7 @@ struct Grain {
   Vec3 x;           // centre [m]; 2D packings have x.y() == 0
   double r = 0.0;   // radius [m]
   int species = 1;  // component of a mixture, 1, 2, ...
+  std::int32_t cluster = 0;  // rigid cluster it belongs to, 1, 2, ...; 0 = a free grain
 };
 
 using Grains = std::vector<Grain>;

@@ -107,6 +107,15 @@ struct DrumSpec {
   std::int64_t snapshot_every = 0;  // steps between snapshots (the initial and last are always written)
 };
 
+// Rigid clusters (seed 000 section 5, cohesive nano-powders): the grains are dropped as random compact
+// clusters of `size` grains, then `cycles` times the deposit is cut into square (cubic) blocks
+// `block` mean diameters wide, split into clusters of touching grains, and those are dropped again.
+struct ClustersSpec {
+  std::int64_t size = 3;
+  double block = 50.0;      // mean grain diameters
+  std::int64_t cycles = 0;
+};
+
 struct Scene {
   std::string name;
   std::string file;  // path it was read from
@@ -119,6 +128,7 @@ struct Scene {
   std::optional<IntruderSpec> intruder;
   std::optional<ShakingSpec> shaking;
   std::optional<DrumSpec> drum;
+  std::optional<ClustersSpec> clusters;
 };
 
 }  // namespace btr

@@ -32,7 +32,7 @@ class SceneParser {
 
   Scene parse() {
     rd_.check_keys(root_,
-                   {"scene", "grains", "container", "source", "material", "relax", "intruder", "shaking", "drum"});
+                   {"scene", "grains", "container", "source", "material", "relax", "intruder", "shaking", "drum", "clusters"});
     scene_.file = path_;
     parse_scene(required_table("scene"));
     parse_relax();  // first: relax.model decides which material keys are allowed
@@ -51,6 +51,7 @@ class SceneParser {
     parse_intruder();
     parse_shaking();
     parse_drum();
+    parse_clusters();
     check_container_holds_grains(container);
     check_source_fits(source);
     return scene_;
@@ -122,6 +123,24 @@ class SceneParser {
                                     "a positive number of cycles")
                             .value_or(sh.cycles);
     scene_.shaking = sh;
+  }
+
+  void parse_clusters() {
+    auto s = rd_.table(root_, "clusters", "[clusters]");
+    if (!s) return;
+    rd_.check_keys(*s, {"size", "block", "cycles"});
+    const ContainerKind kind = scene_.container.kind;
+    if (kind != ContainerKind::Box && kind != ContainerKind::Periodic)
+      rd_.fail(s->line, "[clusters]: expected container.kind = \"box\" or \"periodic\" (clusters are dropped at "
+                        "random positions over its width), got \"" + std::string(to_string(kind)) + "\"");
+    ClustersSpec c;
+    c.size = rd_.integer(*s, "size", [](std::int64_t v) { return v >= 1 && v <= 100000; },
+                         "an integer number of grains per initial cluster, 1 to 100000")
+                 .value_or(c.size);
+    c.block = rd_.number_or(*s, "block", c.block, positive, "a positive block size in mean grain diameters");
+    c.cycles = rd_.integer(*s, "cycles", [](std::int64_t v) { return v >= 0; }, "a number of cycles >= 0")
+                   .value_or(c.cycles);
+    scene_.clusters = c;
   }
 
   void parse_drum() {

@@ -1,6 +1,7 @@
 // Packing files: NAME.csv (the interchange format), NAME.json (metadata), NAME.vtp (for ParaView).
 #include "coupling/packing_io.h"
 
+#include <algorithm>
 #include <unistd.h>
 
 #include <cerrno>
@@ -30,8 +31,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// A packing with rigid clusters has a seventh column, cluster (0 = a free grain); one without any
+// keeps the six-column form, byte for byte as before clusters existed.
 constexpr const char* kHeader = "id,x,y,z,radius,species";
-constexpr const char* kColumns[] = {"id", "x", "y", "z", "radius", "species"};
+constexpr const char* kClusterHeader = "id,x,y,z,radius,species,cluster";
+constexpr const char* kColumns[] = {"id", "x", "y", "z", "radius", "species", "cluster"};
 
 [[noreturn]] void csv_error(const std::string& file, std::int64_t line, const std::string& what) {
   throw std::runtime_error(file + ":" + std::to_string(line) + ": " + what);
@@ -76,12 +80,15 @@ Grains read_csv(const std::string& path) {
   std::string text;
   std::int64_t line_no = 0;
   std::int64_t blank_line = 0;  // first blank line seen; only trailing blank lines are allowed
+  int columns = 6;
   while (std::getline(in, text)) {
     ++line_no;
     if (!text.empty() && text.back() == '\r') text.pop_back();
     if (line_no == 1) {
-      if (text != kHeader)
-        csv_error(path, 1, std::string("expected the header '") + kHeader + "', got " + excerpt(text));
+      if (text == kClusterHeader) columns = 7;
+      else if (text != kHeader)
+        csv_error(path, 1, std::string("expected the header '") + kHeader + "' or '" + kClusterHeader + "', got " +
+                               excerpt(text));
       continue;
     }
     if (text.empty()) {
@@ -90,18 +97,21 @@ Grains read_csv(const std::string& path) {
     }
     if (blank_line != 0) csv_error(path, blank_line, "blank line inside the data");
 
-    std::string_view fields[6];
+    std::string_view fields[7];
     std::string_view rest(text);
     int n = 0;
+    const std::string header = columns == 7 ? kClusterHeader : kHeader;
     while (true) {
       std::size_t comma = rest.find(',');
-      if (n == 6) csv_error(path, line_no, "expected 6 columns (" + std::string(kHeader) + "), got more");
+      if (n == columns)
+        csv_error(path, line_no, "expected " + std::to_string(columns) + " columns (" + header + "), got more");
       fields[n++] = rest.substr(0, comma);
       if (comma == std::string_view::npos) break;
       rest.remove_prefix(comma + 1);
     }
-    if (n != 6)
-      csv_error(path, line_no, "expected 6 columns (" + std::string(kHeader) + "), got " + std::to_string(n));
+    if (n != columns)
+      csv_error(path, line_no,
+                "expected " + std::to_string(columns) + " columns (" + header + "), got " + std::to_string(n));
 
     const std::int64_t expected_id = static_cast<std::int64_t>(grains.size()) + 1;
     std::int64_t id = parse_int(fields[0], path, line_no, 0);
@@ -118,6 +128,13 @@ Grains read_csv(const std::string& path) {
     if (species < 1 || species > 1000000)
       csv_error(path, line_no, "column 'species': expected an integer >= 1, got " + excerpt(fields[5]));
     g.species = static_cast<int>(species);
+    if (columns == 7) {
+      const std::int64_t cluster = parse_int(fields[6], path, line_no, 6);
+      if (cluster < 0 || cluster > 2000000000)
+        csv_error(path, line_no, "column 'cluster': expected an integer >= 0 (0 = a free grain), got " +
+                                     excerpt(fields[6]));
+      g.cluster = static_cast<std::int32_t>(cluster);
+    }
     grains.push_back(g);
   }
   if (in.bad()) throw std::runtime_error(path + ": read error: " + std::strerror(errno));
@@ -162,12 +179,15 @@ void write_csv(const TempFile& file, const Grains& grains) {
   const std::string name = file.final_path().string();
   std::unique_ptr<std::FILE, FileCloser> f(std::fopen(file.temp().c_str(), "wb"));
   if (!f) throw std::runtime_error(name + ": cannot create " + file.temp().string() + ": " + std::strerror(errno));
-  std::string buffer = std::string(kHeader) + "\n";
+  const bool clusters = std::any_of(grains.begin(), grains.end(), [](const Grain& g) { return g.cluster != 0; });
+  std::string buffer = std::string(clusters ? kClusterHeader : kHeader) + "\n";
   char row[256];
   for (std::size_t i = 0; i < grains.size(); ++i) {
     const Grain& g = grains[i];
-    int n = std::snprintf(row, sizeof row, "%zu,%.17g,%.17g,%.17g,%.17g,%d\n", i + 1, g.x.x(), g.x.y(),
-                          g.x.z(), g.r, g.species);
+    int n = clusters ? std::snprintf(row, sizeof row, "%zu,%.17g,%.17g,%.17g,%.17g,%d,%d\n", i + 1, g.x.x(),
+                                     g.x.y(), g.x.z(), g.r, g.species, static_cast<int>(g.cluster))
+                     : std::snprintf(row, sizeof row, "%zu,%.17g,%.17g,%.17g,%.17g,%d\n", i + 1, g.x.x(), g.x.y(),
+                                     g.x.z(), g.r, g.species);
     buffer.append(row, static_cast<std::size_t>(n));
     if (buffer.size() > (1u << 20)) {
       if (std::fwrite(buffer.data(), 1, buffer.size(), f.get()) != buffer.size())
@@ -203,6 +223,9 @@ void write_vtp(const TempFile& file, const Grains& grains, const std::vector<Poi
   vtkNew<vtkIntArray> species;
   species->SetName("species");
   species->SetNumberOfValues(n);
+  vtkNew<vtkIntArray> cluster;  // colour by cluster in ParaView (0 = a free grain)
+  cluster->SetName("cluster");
+  cluster->SetNumberOfValues(n);
   vtkNew<vtkIdTypeArray> offsets, connectivity;
   offsets->SetNumberOfValues(n + 1);
   connectivity->SetNumberOfValues(n);
@@ -212,6 +235,7 @@ void write_vtp(const TempFile& file, const Grains& grains, const std::vector<Poi
     radius->SetValue(i, g.r);
     id->SetValue(i, i + 1);
     species->SetValue(i, g.species);
+    cluster->SetValue(i, g.cluster);
     offsets->SetValue(i, i);
     connectivity->SetValue(i, i);
   }
@@ -225,6 +249,8 @@ void write_vtp(const TempFile& file, const Grains& grains, const std::vector<Poi
   poly->GetPointData()->AddArray(radius);
   poly->GetPointData()->AddArray(id);
   poly->GetPointData()->AddArray(species);
+  if (std::any_of(grains.begin(), grains.end(), [](const Grain& g) { return g.cluster != 0; }))
+    poly->GetPointData()->AddArray(cluster);
   poly->GetPointData()->SetActiveScalars("radius");
   for (const PointData& pd : extra) {
     vtkNew<vtkDoubleArray> a;
@@ -274,8 +300,9 @@ void write_packing(const std::string& dir, const std::string& name, const Packin
     if (pd.values.size() != packing.grains.size())
       throw std::runtime_error("point data '" + pd.name + "': expected " + std::to_string(packing.grains.size()) +
                                " values (one per grain), got " + std::to_string(pd.values.size()));
-    if (pd.name.empty() || pd.name == "radius" || pd.name == "id" || pd.name == "species")
-      throw std::runtime_error("point data '" + pd.name + "': expected a non-empty name other than radius, id, species");
+    if (pd.name.empty() || pd.name == "radius" || pd.name == "id" || pd.name == "species" ||
+        pd.name == "cluster")
+      throw std::runtime_error("point data '" + pd.name + "': expected a non-empty name other than radius, id, species, cluster");
   }
   std::error_code ec;
   fs::create_directories(dir.empty() ? fs::path(".") : fs::path(dir), ec);

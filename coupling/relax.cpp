@@ -2,6 +2,7 @@
 // checks of the result, output files. The engines live behind EngineAdapter.
 #include "coupling/relax.h"
 
+#include <stdexcept>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -448,6 +449,14 @@ std::vector<std::string> export_inputs(const Packing& packing, const Scene& scen
 
 RelaxResult relax(const Packing& packing, const Scene& scene, const std::string& engine,
                   const RelaxSettings& settings, const std::string& out_dir) {
+  // Relaxing the members of rigid clusters as free grains would let the clusters fall apart; neither
+  // engine's export of clusters as rigid bodies (YADE clumps, a LIGGGHTS rigid-body fix) exists yet.
+  for (const Grain& g : packing.grains)
+    if (g.cluster != 0)
+      throw std::invalid_argument("the packing has rigid clusters (grain with cluster " + std::to_string(g.cluster) +
+                                  "): relaxing clusters with " + engine +
+                                  " is not supported (no export of clusters as rigid bodies: YADE clumps and a "
+                                  "LIGGGHTS rigid-body fix are not implemented)");
   const auto adapter = make_adapter(engine);
   IntendedOverlaps intended;
   const Packing start = starting_packing(packing, scene, settings, intended, out_dir);

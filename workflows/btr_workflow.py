@@ -8,6 +8,8 @@
   stability [-o OUTDIR] [--tiny|--full]   stiff/extreme cases run to rest; stable-step margin by bisection
   brazil-nut [-o OUTDIR] [--tiny]         intruder rise under dynamic BTR shaking, Phi sweep, 3D and 2D
   drum [-o OUTDIR] [--revolutions N]      segregation and dynamic angle in a rotating drum (2D, 3D)
+  hele-shaw [-o OUTDIR] [--reduced|--tiny] angle of repose in Hele-Shaw cells (seed 003): DEM, BTR, BTR + relax
+  nano-powder [-o OUTDIR] [--cycles N]    rigid clusters redeposited: <h> = a - b exp(-n/tau) (2D, 3D)
 
 The `btr` program is $BTR_BINARY, else build/app/btr. Exit status: 0 done, 2 bad input, 3 a step failed
 (its error is printed and recorded in OUTDIR/run.json; what earlier steps wrote is kept)."""
@@ -145,6 +147,11 @@ def main(argv=None) -> int:
     hs.add_argument("--n", type=int, help="grains at w = 3 d (skips the theta-against-N sweep)")
     hs.add_argument("--seed", type=int, default=1)
 
+    nano = sub.add_parser("nano-powder", help="rigid clusters redeposited (btr redeposit): fit <h> = a - b exp(-n/tau)")
+    nano.add_argument("-o", "--out", help="output folder (default out/nano_powder)")
+    nano.add_argument("--cycles", type=int, default=12)
+    nano.add_argument("--tiny", action="store_true", help="a few hundred grains, for tests")
+
     args = ap.parse_args(argv)
     try:
         if args.command == "compare":
@@ -227,6 +234,11 @@ def main(argv=None) -> int:
             if not args.revolutions > 0:
                 raise InputError(f"--revolutions: expected a positive number, got {args.revolutions}")
             run_drum(args.out, args.revolutions, args.tiny, progress)
+        elif args.command == "nano-powder":
+            from btrdem.nano_powder import run_nano_powder
+            if args.cycles < 3:
+                raise InputError(f"--cycles: expected at least 3 cycles to fit, got {args.cycles}")
+            run_nano_powder(args.out, args.cycles, args.tiny, progress)
     except InputError as e:
         print(f"btr_workflow.py {args.command}: {e}", file=sys.stderr)
         return 2

@@ -1,7 +1,8 @@
 # One end-to-end case of the `btr` program, run by ctest:
 #   cmake -DBTR=<program> -DINPUTS=<inputs dir> -DWORK=<scratch dir> -DCASE=<case>
 #         [-DSCENE=<name in inputs/>] [-DCOUNT=<grains>] -P cli_case.cmake
-# Cases: deterministic, check, missing_scene, unknown_key, shake_series, shake_without_table, drum_series. Fails with message(FATAL_ERROR).
+# Cases: deterministic, check, missing_scene, unknown_key, shake_series, shake_without_table, drum_series,
+# redeposit_series, redeposit_without_table. Fails with message(FATAL_ERROR).
 cmake_minimum_required(VERSION 3.18)
 
 # Runs the program; sets <prefix>_code and <prefix>_text (stdout + stderr).
@@ -167,6 +168,34 @@ elseif(CASE STREQUAL "drum_series")
   if(SCENE MATCHES "periodic")
     expect_mentions(r "(periodic ends)")
   endif()
+
+elseif(CASE STREQUAL "redeposit_series")
+  # Rigid clusters: same scene and seed twice give byte-identical snapshots (CSV with the cluster
+  # column, VTP) and size tables; every cycle passes --check (no overlap, every cluster supported).
+  foreach(run a b)
+    run_btr(r redeposit "${scene}" -o "${WORK}/${run}" --cycles 2 --check --quiet)
+    expect_code(r 0)
+  endforeach()
+  file(GLOB snaps RELATIVE "${WORK}/a" "${WORK}/a/${SCENE}_c[0-9]*.csv" "${WORK}/a/${SCENE}_c[0-9]*.vtp")
+  list(LENGTH snaps n_snaps)
+  if(NOT n_snaps EQUAL 6)
+    message(FATAL_ERROR "expected snapshots at cycles 0, 1, 2 (CSV + VTP), got: ${snaps}")
+  endif()
+  foreach(f ${snaps} "${SCENE}_sizes.csv")
+    execute_process(COMMAND ${CMAKE_COMMAND} -E compare_files "${WORK}/a/${f}" "${WORK}/b/${f}" RESULT_VARIABLE same)
+    if(NOT same EQUAL 0)
+      message(FATAL_ERROR "${f} differs between two runs with the same seed")
+    endif()
+  endforeach()
+  file(STRINGS "${WORK}/a/${SCENE}_c000000.csv" head LIMIT_COUNT 1)
+  if(NOT head STREQUAL "id,x,y,z,radius,species,cluster")
+    message(FATAL_ERROR "expected the cluster column in the header, got '${head}'")
+  endif()
+
+elseif(CASE STREQUAL "redeposit_without_table")
+  run_btr(r redeposit "${scene}" -o "${WORK}/out")
+  expect_code(r 2)
+  expect_mentions(r "missing table [clusters]")
 
 elseif(CASE STREQUAL "shake_without_table")
   run_btr(r shake "${scene}" -o "${WORK}/out")

@@ -215,5 +215,38 @@ TEST(PackingIO, BadCsvErrorsNameFileLineAndWhatWasExpected) {
   fs::remove_all(dir);
 }
 
+// A packing with clusters gains the cluster column (bit-exact round trip, VTP array); its absence
+// keeps the six-column form; a bad cluster value is named.
+TEST(PackingIO, ClusterColumnRoundTripsAndIsOptional) {
+  const fs::path dir = fresh_dir("clusters");
+  Packing p = awkward_packing(50);
+  write_packing(dir.string(), "free", p);
+  EXPECT_EQ(slurp(dir / "free.csv").substr(0, 24), "id,x,y,z,radius,species\n");
+  for (std::size_t i = 0; i < p.grains.size(); ++i) p.grains[i].cluster = static_cast<std::int32_t>(i / 3);
+  write_packing(dir.string(), "clustered", p);
+  std::istringstream csv(slurp(dir / "clustered.csv"));
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "id,x,y,z,radius,species,cluster");
+  std::getline(csv, line);
+  EXPECT_EQ(line.substr(line.size() - 2), ",0");
+  const Packing q = read_packing((dir / "clustered.csv").string());
+  ASSERT_EQ(q.grains.size(), p.grains.size());
+  for (std::size_t i = 0; i < p.grains.size(); ++i) {
+    EXPECT_EQ(q.grains[i].cluster, p.grains[i].cluster) << i;
+    EXPECT_TRUE(same_bits(q.grains[i].x.z(), p.grains[i].x.z())) << i;
+  }
+  vtkNew<vtkXMLPolyDataReader> reader;
+  reader->SetFileName((dir / "clustered.vtp").c_str());
+  reader->Update();
+  vtkDataArray* cl = reader->GetOutput()->GetPointData()->GetArray("cluster");
+  ASSERT_NE(cl, nullptr);
+  EXPECT_EQ(cl->GetTuple1(49), 16.0);
+  spit(dir / "bad.csv", "id,x,y,z,radius,species,cluster\n1,0,0,0.001,0.001,1,-2\n");
+  const std::string msg = read_error(dir / "bad.csv");
+  EXPECT_NE(msg.find("bad.csv:2: column 'cluster': expected an integer >= 0"), std::string::npos) << msg;
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace btr

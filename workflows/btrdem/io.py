@@ -15,6 +15,8 @@ import numpy as np
 from .geometry import Container
 
 HEADER = ["id", "x", "y", "z", "radius", "species"]
+# A packing with rigid clusters has a seventh column, cluster (0 = a free grain).
+CLUSTER_HEADER = HEADER + ["cluster"]
 
 
 class InputError(Exception):
@@ -29,6 +31,7 @@ class Packing:
     species: np.ndarray    # (N,) int
     meta: dict = field(default_factory=dict)  # NAME.json, or {} if there is none
     path: str = ""
+    cluster: np.ndarray | None = None  # (N,) int rigid cluster number (0 = free); None: no such column
 
     def __len__(self):
         return len(self.ids)
@@ -113,17 +116,19 @@ def read_packing(csv_path: str | os.PathLike) -> Packing:
         with open(csv_path) as f:
             header = f.readline().strip()
             cols = [c.strip() for c in header.split(",")]
-            if cols != HEADER:
-                raise InputError(f"{csv_path}:1: expected the header '{','.join(HEADER)}', got '{header}'")
+            if cols not in (HEADER, CLUSTER_HEADER):
+                raise InputError(f"{csv_path}:1: expected the header '{','.join(HEADER)}' or "
+                                 f"'{','.join(CLUSTER_HEADER)}', got '{header}'")
+            ncol = len(cols)
             rows = []
             for lineno, line in enumerate(f, start=2):
                 line = line.strip()
                 if not line:
                     continue
                 parts = line.split(",")
-                if len(parts) != 6:
-                    raise InputError(f"{csv_path}:{lineno}: expected 6 comma-separated values "
-                                     f"({','.join(HEADER)}), got {len(parts)}")
+                if len(parts) != ncol:
+                    raise InputError(f"{csv_path}:{lineno}: expected {ncol} comma-separated values "
+                                     f"({','.join(cols)}), got {len(parts)}")
                 try:
                     vals = [float(p) for p in parts]
                 except ValueError:
@@ -137,7 +142,7 @@ def read_packing(csv_path: str | os.PathLike) -> Packing:
                 rows.append(vals)
     except FileNotFoundError:
         raise InputError(f"{csv_path}: no such packing file") from None
-    a = np.array(rows, dtype=float).reshape(-1, 6)
+    a = np.array(rows, dtype=float).reshape(-1, ncol)
     ids = a[:, 0].astype(np.int64)
     order = np.argsort(ids, kind="stable")
     a, ids = a[order], ids[order]
@@ -149,13 +154,15 @@ def read_packing(csv_path: str | os.PathLike) -> Packing:
     if os.path.exists(jp):
         meta = read_json(jp)
     return Packing(ids=ids, pos=a[:, 1:4].copy(), radius=a[:, 4].copy(), species=a[:, 5].astype(int),
-                   meta=meta, path=csv_path)
+                   meta=meta, path=csv_path, cluster=a[:, 6].astype(int) if ncol == 7 else None)
 
 
 def packing_csv_text(p: Packing) -> str:
-    lines = [",".join(HEADER)]
-    for i, (x, y, z), r, s in zip(p.ids, p.pos, p.radius, p.species):
-        lines.append(f"{int(i)},{x:.17g},{y:.17g},{z:.17g},{r:.17g},{int(s)}")
+    clusters = p.cluster is not None and bool(np.any(p.cluster != 0))
+    lines = [",".join(CLUSTER_HEADER if clusters else HEADER)]
+    for k, (i, (x, y, z), r, s) in enumerate(zip(p.ids, p.pos, p.radius, p.species)):
+        tail = f",{int(p.cluster[k])}" if clusters else ""
+        lines.append(f"{int(i)},{x:.17g},{y:.17g},{z:.17g},{r:.17g},{int(s)}{tail}")
     return "\n".join(lines) + "\n"
 
 

@@ -1,0 +1,277 @@
+// Rigid clusters: hand geometry, invariants of random cluster packings, the independent check.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "btr/cluster.h"
+#include "btr/cluster_check.h"
+#include "btr/deposition.h"
+
+namespace btr {
+namespace {
+
+Container box(double sx, double sy) {
+  Container c;
+  c.kind = ContainerKind::Box;
+  c.size_x = sx;
+  c.size_y = sy;
+  return c;
+}
+
+ClusterShape dimer(double r) {
+  ClusterShape s;
+  s.add(Vec3(-r, 0, 0), r);
+  s.add(Vec3(r, 0, 0), r);
+  return s;
+}
+
+Eigen::Quaterniond about_y(double angle) { return Eigen::Quaterniond(Eigen::AngleAxisd(angle, Vec3::UnitY())); }
+
+Vec3 centre_of_mass(const Grains& g, int dim) {
+  Vec3 G = Vec3::Zero();
+  double m = 0;
+  for (const Grain& x : g) { G += std::pow(x.r, dim) * x.x; m += std::pow(x.r, dim); }
+  return G / m;
+}
+
+// A tilted dimer on a frictionless floor: only vertical forces act, so its centre of mass falls
+// straight down and it ends flat, both members on the floor, its axis in the plane it started in.
+TEST(Clusters, DimerLiesFlatOnTheFloor) {
+  for (int dim : {2, 3}) {
+    Deposition dep(dim, box(10, 10), 0.5);
+    ClusterDrop drop;
+    drop.x = 0.3;
+    drop.y = 0.2;
+    drop.shape = dimer(0.5);
+    drop.orientation = about_y(0.6);
+    EXPECT_EQ(dep.place_cluster(drop), 1);
+    const Grains& g = dep.grains();
+    ASSERT_EQ(g.size(), 2u);
+    const double y = dim == 3 ? 0.2 : 0.0;
+    for (const Grain& x : g) {
+      EXPECT_NEAR(x.x.z(), 0.5, 1e-9) << dim;
+      EXPECT_NEAR(x.x.y(), y, 1e-12) << dim;
+      EXPECT_EQ(x.cluster, 1);
+    }
+    EXPECT_NEAR(std::min(g[0].x.x(), g[1].x.x()), -0.2, 1e-9) << dim;
+    EXPECT_NEAR(std::max(g[0].x.x(), g[1].x.x()), 0.8, 1e-9) << dim;
+    EXPECT_NEAR((g[0].x - g[1].x).norm(), 1.0, 1e-12);
+    EXPECT_TRUE(check_clusters(g, dim, box(10, 10)).ok());
+  }
+}
+
+// A tilted dimer whose upper member touches the wall x = +2 at the drop: the wall only pushes it
+// towards -x, so it ends flat on the floor against the wall: members at x = 1.5 and 0.5.
+TEST(Clusters, DimerSlidesDownAWall) {
+  for (int dim : {2, 3}) {
+    Deposition dep(dim, box(4, 4), 0.5);
+    ClusterDrop drop;
+    const double tilt = M_PI / 4;  // upper member towards +x
+    drop.shape = dimer(0.5);
+    drop.orientation = about_y(-tilt);
+    drop.x = 1.5 - 0.5 * std::cos(tilt);
+    dep.place_cluster(drop);
+    const Grains& g = dep.grains();
+    const Grain& right = g[0].x.x() > g[1].x.x() ? g[0] : g[1];
+    const Grain& left = g[0].x.x() > g[1].x.x() ? g[1] : g[0];
+    EXPECT_NEAR(right.x.x(), 1.5, 1e-9) << dim;
+    EXPECT_NEAR(left.x.x(), 0.5, 1e-9) << dim;
+    EXPECT_NEAR(right.x.z(), 0.5, 1e-9) << dim;
+    EXPECT_NEAR(left.x.z(), 0.5, 1e-9) << dim;
+    EXPECT_TRUE(check_clusters(g, dim, box(4, 4)).ok());
+  }
+}
+
+// A flat equilateral trimer (side 2r) over three fixed grains at the corners of a triangle of side
+// 1.2 (2r = 1), turned by 60 degrees so each member nests between two supports. Dropped off centre,
+// it slides into the nest: centre of mass on the axis, members at the height closed form below.
+TEST(Clusters, TrimerNestsOnThreeGrains) {
+  const double r = 0.5, a = 1.2 / std::sqrt(3.0), b = 1.0 / std::sqrt(3.0);
+  Deposition dep(3, box(10, 10), r);
+  for (int k = 0; k < 3; ++k) {
+    Drop d;
+    d.x = a * std::cos(2 * M_PI * k / 3);
+    d.y = a * std::sin(2 * M_PI * k / 3);
+    d.r = r;
+    dep.place(d);
+  }
+  ClusterShape tri;
+  for (int k = 0; k < 3; ++k)
+    tri.add(Vec3(b * std::cos(2 * M_PI * k / 3 + M_PI / 3), b * std::sin(2 * M_PI * k / 3 + M_PI / 3), 0), r);
+  ClusterDrop drop;
+  drop.shape = tri;
+  drop.x = 0.04;
+  drop.y = -0.03;
+  dep.place_cluster(drop);
+  const Grains& g = dep.grains();
+  ASSERT_EQ(g.size(), 6u);
+  // Horizontal distance member-support: law of cosines with the 60 degree offset.
+  const double dxy2 = a * a + b * b - 2 * a * b * std::cos(M_PI / 3);
+  const double z = r + std::sqrt(4 * r * r - dxy2);
+  const Grains members(g.begin() + 3, g.end());
+  const Vec3 G = centre_of_mass(members, 3);
+  EXPECT_NEAR(G.x(), 0.0, 1e-7);
+  EXPECT_NEAR(G.y(), 0.0, 1e-7);
+  for (const Grain& m : members) EXPECT_NEAR(m.x.z(), z, 1e-7);
+  EXPECT_TRUE(check_clusters(g, 3, box(10, 10)).ok());
+}
+
+struct Pile {
+  Grains grains;
+  std::vector<ClusterShape> shapes;
+};
+
+Pile random_pile(int dim, const Container& c, int clusters, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  Deposition dep(dim, c, 0.55);
+  Pile p;
+  auto radius = [](std::mt19937_64& g) { return std::uniform_real_distribution<double>(0.45, 0.55)(g); };
+  for (int i = 0; i < clusters; ++i) {
+    const int n = 1 + static_cast<int>(rng() % 5);
+    ClusterDrop d;
+    d.shape = random_compact_cluster(dim, n, rng, radius);
+    d.orientation = random_orientation(dim, rng);
+    const double half = 0.5 * c.size_x - d.shape.extent();
+    d.x = std::uniform_real_distribution<double>(-half, half)(rng);
+    d.y = dim == 3 ? std::uniform_real_distribution<double>(-half, half)(rng) : 0.0;
+    dep.place_cluster(d);
+    p.shapes.push_back(d.shape);
+  }
+  p.grains = dep.release();
+  return p;
+}
+
+// Random cluster packings: no overlap between clusters, every cluster supported (independent check),
+// members' relative positions as in the shape to 1e-12, and the same seed gives the same packing.
+TEST(Clusters, RandomPackingsKeepTheirInvariants) {
+  for (int dim : {2, 3}) {
+    const Container c = box(dim == 3 ? 6 : 16, 6);
+    const Pile p = random_pile(dim, c, dim == 3 ? 40 : 50, 7);
+    const ClusterCheckReport rep = check_clusters(p.grains, dim, c);
+    EXPECT_TRUE(rep.ok()) << "dim " << dim << ": overlaps " << rep.overlaps << " (max " << rep.max_overlap
+                          << "), unsupported " << rep.unsupported;
+    EXPECT_EQ(rep.bodies, static_cast<std::int64_t>(p.shapes.size()));
+    const auto bodies = rigid_bodies(p.grains);
+    ASSERT_EQ(bodies.size(), p.shapes.size());
+    double worst = 0.0;
+    for (std::size_t b = 0; b < bodies.size(); ++b)
+      for (std::size_t i = 0; i < bodies[b].size(); ++i)
+        for (std::size_t j = i + 1; j < bodies[b].size(); ++j) {
+          const double placed = (p.grains[bodies[b][i]].x - p.grains[bodies[b][j]].x).norm();
+          const double shape = (p.shapes[b].offsets[i] - p.shapes[b].offsets[j]).norm();
+          worst = std::max(worst, std::abs(placed - shape));
+        }
+    EXPECT_LT(worst, 1e-12) << dim;
+    const Pile again = random_pile(dim, c, dim == 3 ? 40 : 50, 7);
+    ASSERT_EQ(again.grains.size(), p.grains.size());
+    for (std::size_t i = 0; i < p.grains.size(); ++i) EXPECT_EQ(again.grains[i].x, p.grains[i].x);
+  }
+}
+
+// The independent check catches a cluster lifted off its supports and one pushed into another.
+TEST(Clusters, CheckCatchesBrokenPackings) {
+  const Container c = box(6, 6);
+  Pile p = random_pile(3, c, 20, 3);
+  ASSERT_TRUE(check_clusters(p.grains, 3, c).ok());
+  Grains lifted = p.grains, sunk = p.grains;
+  const std::int32_t last = p.grains.back().cluster;
+  for (Grain& g : lifted)
+    if (g.cluster == last) g.x.z() += 0.01;
+  EXPECT_EQ(check_clusters(lifted, 3, c).unsupported, 1);
+  for (Grain& g : sunk)
+    if (g.cluster == last) g.x.z() -= 0.05;
+  EXPECT_GT(check_clusters(sunk, 3, c).overlaps, 0);
+}
+
+// More than 14 contacts (the check's projected-gradient branch): a vertical column of 16 disks, one
+// cluster, each member touching the wall x = -2: supported when it stands on the floor, not when lifted.
+TEST(Clusters, CheckWithManyContacts) {
+  const Container c = box(4, 4);
+  Grains column;
+  for (int k = 0; k < 16; ++k) {
+    Grain g;
+    g.x = Vec3(-1.5, 0.0, 0.5 + k);
+    g.r = 0.5;
+    g.cluster = 1;
+    column.push_back(g);
+  }
+  EXPECT_TRUE(check_clusters(column, 2, c).ok());
+  for (Grain& g : column) g.x.z() += 0.01;
+  const ClusterCheckReport lifted = check_clusters(column, 2, c);
+  EXPECT_EQ(lifted.unsupported, 1);
+  EXPECT_EQ(lifted.overlaps, 0);
+}
+
+// A one-grain cluster follows the same physics as a grain: both engines give the same packing.
+TEST(Clusters, SingleGrainClustersMatchTheGrainEngine) {
+  const Container c = box(5, 5);
+  Deposition grains(3, c, 0.5), clusters(3, c, 0.5);
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> pos(-2.0, 2.0), rad(0.4, 0.5);
+  for (int i = 0; i < 60; ++i) {
+    Drop d;
+    d.x = pos(rng);
+    d.y = pos(rng);
+    d.r = rad(rng);
+    grains.place(d);
+    ClusterDrop cd;
+    cd.x = d.x;
+    cd.y = d.y;
+    cd.shape.add(Vec3::Zero(), d.r);
+    clusters.place_cluster(cd);
+  }
+  int far = 0;
+  for (std::size_t i = 0; i < grains.grains().size(); ++i)
+    if ((grains.grains()[i].x - clusters.grains()[i].x).norm() > 1e-6 && far++ == 0)
+      ADD_FAILURE() << "first difference at grain " << i + 1 << ": " << grains.grains()[i].x.transpose() << " vs "
+                    << clusters.grains()[i].x.transpose();
+  EXPECT_EQ(far, 0);
+}
+
+// An exhausted event budget is an error naming the cluster.
+TEST(Clusters, BudgetExceededNamesTheCluster) {
+  Deposition dep(3, box(6, 6), 0.5, 1);  // 20 steps per cluster
+  std::mt19937_64 rng(5);
+  auto radius = [](std::mt19937_64&) { return 0.5; };
+  try {
+    for (int i = 0; i < 30; ++i) {
+      ClusterDrop d;
+      d.shape = random_compact_cluster(3, 6, rng, radius);
+      d.orientation = random_orientation(3, rng);
+      dep.place_cluster(d);
+    }
+    FAIL() << "no budget error";
+  } catch (const PlacementError& e) {
+    EXPECT_NE(std::string(e.what()).find("cluster "), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("steps"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Clusters, RandomCompactClustersTouchAndDoNotOverlap) {
+  std::mt19937_64 rng(1);
+  auto radius = [](std::mt19937_64& g) { return std::uniform_real_distribution<double>(0.9, 1.1)(g); };
+  for (int dim : {2, 3}) {
+    const ClusterShape s = random_compact_cluster(dim, 12, rng, radius);
+    ASSERT_EQ(s.size(), 12u);
+    Vec3 G = Vec3::Zero();
+    double m = 0;
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      G += std::pow(s.radii[i], dim) * s.offsets[i];
+      m += std::pow(s.radii[i], dim);
+      if (dim == 2) EXPECT_EQ(s.offsets[i].y(), 0.0);
+      int touching = 0;
+      for (std::size_t j = 0; j < s.size(); ++j) {
+        if (i == j) continue;
+        const double gap = (s.offsets[i] - s.offsets[j]).norm() - s.radii[i] - s.radii[j];
+        EXPECT_GT(gap, -1e-12);
+        touching += gap < 1e-12;
+      }
+      EXPECT_GE(touching, 1);
+    }
+    EXPECT_LT((G / m).norm(), 1e-12);
+  }
+}
+
+}  // namespace
+}  // namespace btr
