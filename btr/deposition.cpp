@@ -576,7 +576,10 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
   Contacts active;
   bool stable = false;
   int drum_stalls = 0;
+  Vec3 blocked_tie = Vec3::Zero();  // the last tie-break roll that could not move the grain
   for (int event = 0; event < max_events && !stable; ++event) {
+    bool tied = false;
+    const Vec3 before_event = x;
     Vec3 normals[kMaxContacts];
     for (int i = 0; i < active.n; ++i) normals[i] = active.item[i].normal(x);
     const Descent descent = descend(normals, static_cast<std::size_t>(active.n));
@@ -604,7 +607,11 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
       // a direction fixed by the grain's id, so the result is deterministic.
       d = tie_break(x, active, static_cast<std::uint64_t>(id) * 1315423911ULL + event);
       if (d.isZero()) { stable = true; break; }
+      // The last roll off this top was blocked at once (a wall or grain beside it): try the other side.
+      if (!blocked_tie.isZero() && d.dot(blocked_tie) > 0.0) d = -d;
+      tied = true;
     }
+    if (!tied) blocked_tie = Vec3::Zero();
 
     int spheres = 0, planes = 0, cylinders = 0, drums = 0, si = -1, pi = -1, ci = -1, di = -1;
     for (int i = 0; i < active.n; ++i) {
@@ -700,6 +707,15 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
       throw PlacementError(id, why.str());
     }
     roll_on_arc(x, r, active, arc, walls);
+    if (tied && (x - before_event).squaredNorm() <= 1e-24 * r * r) {
+      // On top of two supports with both sides blocked (grains in one vertical plane against a
+      // Hele-Shaw plate, say): it cannot roll off either way, so it rests there.
+      if (!blocked_tie.isZero()) {
+        stable = true;
+        break;
+      }
+      blocked_tie = d;
+    }
   }
   if (!stable) {
     std::ostringstream why;
@@ -709,6 +725,13 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
     for (int i = 0; i < active.n; ++i) why << (i ? ", " : " (") << names[static_cast<int>(active.item[i].kind)];
     if (active.n) why << ")";
     throw PlacementError(id, why.str());
+  }
+  // A grain rolling along a wall on grains that touch it creeps into it by round-off (~1e-10 r per
+  // event, and the next grain rolling on it goes further): put it back on the wall.
+  for (const Obstacle& w : walls) {
+    if (w.kind != Obstacle::Kind::Plane) continue;
+    const double g = w.gap(x);
+    if (g < 0.0 && g > -1e-7 * r) x -= g * w.c;
   }
   if (wraps_x(container)) x.x() -= container.size_x * std::floor(x.x() / container.size_x + 0.5);
   if (wraps_y(container, dimension)) x.y() -= container.size_y * std::floor(x.y() / container.size_y + 0.5);
