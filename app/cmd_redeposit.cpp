@@ -13,6 +13,7 @@
 #include "btr/deposition.h"
 #include "btr/redeposition.h"
 #include "btr/scene_toml.h"
+#include "command_support.h"
 #include "commands.h"
 #include "coupling/scene_json.h"
 #include "coupling/text_file.h"
@@ -31,85 +32,61 @@ struct Options {
 };
 
 int run(const Options& o, const CLI::App& cmd) {
-  btr::Scene scene;
-  try {
-    scene = btr::load_scene(o.scene);
-  } catch (const btr::SceneError& e) {
-    std::cerr << "btr redeposit: " << e.what() << "\n";
-    return kBadInput;
-  }
-  if (!scene.clusters) {
-    std::cerr << "btr redeposit: " << o.scene << ": missing table [clusters] (size, block, cycles)\n";
-    return kBadInput;
-  }
+  btr::Scene scene = btr::load_scene(o.scene);
+  if (!scene.clusters)
+    throw btr::SceneError(o.scene + ": missing table [clusters] (size, block, cycles)");
   const std::uint64_t seed = cmd.count("--seed") ? o.seed : scene.seed;
   scene.seed = seed;
   if (o.cycles >= 0) scene.clusters->cycles = o.cycles;
-  const std::string name = o.name.empty() ? scene.name : o.name;
-  if (name.empty() || name.find('/') != std::string::npos) {
-    std::cerr << "btr redeposit: --name '" << name << "': expected a file name without '/'\n";
-    return kBadInput;
-  }
+  const std::string name = output_name(o.name, scene);
   const json scene_json = btr::scene_to_json(scene);
   SeriesWriter series(o.out, name, "cycle");
   std::string table = "cycle,seconds,grains,clusters,mean_cluster_size,largest_cluster,mean_height_d,packing_fraction\n";
   std::string sizes = "cycle,size,count\n";
   bool all_ok = true;
-  try {
-    btr::Redeposition redeposition(scene, seed);
-    btr::Grains grains;
-    double d = 0.0;
-    for (std::int64_t c = 0; c <= scene.clusters->cycles; ++c) {
-      const auto t0 = std::chrono::steady_clock::now();
-      grains = c == 0 ? redeposition.initial() : redeposition.cycle(grains);
-      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      if (c == 0) {
-        for (const btr::Grain& g : grains) d += 2.0 * g.r;
-        d /= static_cast<double>(grains.size());
-      }
-      const btr::CycleMeasures m = btr::measure_cycle(grains, scene.dimension, scene.container);
-      std::int64_t clusters = 0, largest = 0;
-      for (std::size_t s = 1; s < m.size_counts.size(); ++s) {
-        clusters += m.size_counts[s];
-        if (m.size_counts[s]) largest = static_cast<std::int64_t>(s);
-        if (m.size_counts[s]) sizes += std::to_string(c) + "," + std::to_string(s) + "," + std::to_string(m.size_counts[s]) + "\n";
-      }
-      char row[320];
-      std::snprintf(row, sizeof row, "%lld,%.6f,%zu,%lld,%.10g,%lld,%.10g,%.10g\n", static_cast<long long>(c), seconds,
-                    grains.size(), static_cast<long long>(clusters), double(grains.size()) / double(clusters),
-                    static_cast<long long>(largest), m.mean_height / d, m.packing_fraction);
-      table += row;
-      json meta = {{"program", "btr"}, {"version", BTR_VERSION}, {"command", "redeposit"},
-                   {"scene_name", scene.name}, {"scene_file", scene.file}, {"scene", scene_json},
-                   {"seed", seed}, {"dimension", scene.dimension}, {"container", scene_json["container"]},
-                   {"count", grains.size()}, {"cycle", c}, {"clusters", clusters}};
-      if (o.check) {
-        const btr::ClusterCheckReport rep = btr::check_clusters(grains, scene.dimension, scene.container);
-        meta["check"] = {{"ok", rep.ok()}, {"overlaps", rep.overlaps}, {"unsupported", rep.unsupported},
-                         {"examples", rep.examples}};
-        if (!rep.ok()) {
-          all_ok = false;
-          std::cerr << "btr redeposit: check failed at cycle " << c << ": " << rep.overlaps << " overlaps, "
-                    << rep.unsupported << " unsupported clusters\n";
-        }
-      }
-      series.write(c, c, grains, meta);
-      btr::write_text_file(o.out + "/" + name + "_cycles.csv", table);
-      btr::write_text_file(o.out + "/" + name + "_sizes.csv", sizes);
-      if (!o.quiet)
-        std::printf("cycle %lld: %lld clusters (largest %lld), <h> = %.4g d, packing fraction %.4f, %.2f s\n",
-                    static_cast<long long>(c), static_cast<long long>(clusters), static_cast<long long>(largest),
-                    m.mean_height / d, m.packing_fraction, seconds);
+  btr::Redeposition redeposition(scene, seed);
+  btr::Grains grains;
+  double d = 0.0;
+  for (std::int64_t c = 0; c <= scene.clusters->cycles; ++c) {
+    const auto t0 = std::chrono::steady_clock::now();
+    grains = c == 0 ? redeposition.initial() : redeposition.cycle(grains);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (c == 0) {
+      for (const btr::Grain& g : grains) d += 2.0 * g.r;
+      d /= static_cast<double>(grains.size());
     }
-  } catch (const btr::SceneError& e) {
-    std::cerr << "btr redeposit: " << e.what() << "\n";
-    return kBadInput;
-  } catch (const btr::PlacementError& e) {
-    std::cerr << "btr redeposit: placement failed: " << e.what() << "\n";
-    return kInternalFailure;
-  } catch (const std::exception& e) {
-    std::cerr << "btr redeposit: " << e.what() << "\n";
-    return kInternalFailure;
+    const btr::CycleMeasures m = btr::measure_cycle(grains, scene.dimension, scene.container);
+    std::int64_t clusters = 0, largest = 0;
+    for (std::size_t s = 1; s < m.size_counts.size(); ++s) {
+      clusters += m.size_counts[s];
+      if (m.size_counts[s]) largest = static_cast<std::int64_t>(s);
+      if (m.size_counts[s]) sizes += std::to_string(c) + "," + std::to_string(s) + "," + std::to_string(m.size_counts[s]) + "\n";
+    }
+    char row[320];
+    std::snprintf(row, sizeof row, "%lld,%.6f,%zu,%lld,%.10g,%lld,%.10g,%.10g\n", static_cast<long long>(c), seconds,
+                  grains.size(), static_cast<long long>(clusters), double(grains.size()) / double(clusters),
+                  static_cast<long long>(largest), m.mean_height / d, m.packing_fraction);
+    table += row;
+    json meta = snapshot_meta("redeposit", scene, scene_json, seed, grains.size());
+    meta["cycle"] = c;
+    meta["clusters"] = clusters;
+    if (o.check) {
+      const btr::ClusterCheckReport rep = btr::check_clusters(grains, scene.dimension, scene.container);
+      meta["check"] = {{"ok", rep.ok()}, {"overlaps", rep.overlaps}, {"unsupported", rep.unsupported},
+                       {"examples", rep.examples}};
+      if (!rep.ok()) {
+        all_ok = false;
+        std::cerr << "btr redeposit: check failed at cycle " << c << ": " << rep.overlaps << " overlaps, "
+                  << rep.unsupported << " unsupported clusters\n";
+      }
+    }
+    series.write(c, c, grains, meta);
+    btr::write_text_file(o.out + "/" + name + "_cycles.csv", table);
+    btr::write_text_file(o.out + "/" + name + "_sizes.csv", sizes);
+    if (!o.quiet)
+      std::printf("cycle %lld: %lld clusters (largest %lld), <h> = %.4g d, packing fraction %.4f, %.2f s\n",
+                  static_cast<long long>(c), static_cast<long long>(clusters), static_cast<long long>(largest),
+                  m.mean_height / d, m.packing_fraction, seconds);
   }
   if (o.check && !all_ok) return kCheckFailed;
   return kSuccess;
@@ -138,7 +115,7 @@ Runner add_redeposit_command(CLI::App& app) {
   cmd->add_flag("--check", o->check, "check every cycle's packing (overlaps, support of every cluster); exit 4 if any fails");
   cmd->add_flag("-q,--quiet", o->quiet, "no per-cycle lines; only errors");
   cmd->add_option("--name", o->name, "base name of the output files (default: the scene name)");
-  return [o, cmd]() { return run(*o, *cmd); };
+  return [o, cmd]() { return run_reporting_errors("redeposit", [&] { return run(*o, *cmd); }); };
 }
 
 }  // namespace btr_app
