@@ -4,10 +4,14 @@
 #include <chrono>
 #include <cmath>
 
+#include "containers.h"
 #include "btr/check.h"
 
 namespace btr {
 namespace {
+
+using test::box;
+using test::periodic;
 
 Grain grain(double x, double y, double z, double r, int species = 1) {
   Grain g;
@@ -19,19 +23,7 @@ Grain grain(double x, double y, double z, double r, int species = 1) {
 
 Container open() { return Container{}; }
 
-Container box(double sx, double sy) {
-  Container c;
-  c.kind = ContainerKind::Box;
-  c.size_x = sx;
-  c.size_y = sy;
-  return c;
-}
 
-Container periodic(double sx, double sy) {
-  Container c = box(sx, sy);
-  c.kind = ContainerKind::Periodic;
-  return c;
-}
 
 // Three touching spheres of radius r on the floor, centroid at the origin.
 Grains triangle(double r) {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <random>
 
+#include "containers.h"
 #include "btr/cluster.h"
 #include "btr/cluster_check.h"
 #include "btr/deposition.h"
@@ -11,13 +12,9 @@
 namespace btr {
 namespace {
 
-Container box(double sx, double sy) {
-  Container c;
-  c.kind = ContainerKind::Box;
-  c.size_x = sx;
-  c.size_y = sy;
-  return c;
-}
+using test::box;
+using test::periodic;
+
 
 ClusterShape dimer(double r) {
   ClusterShape s;
@@ -259,7 +256,9 @@ TEST(Clusters, RandomCompactClustersTouchAndDoNotOverlap) {
     for (std::size_t i = 0; i < s.size(); ++i) {
       G += std::pow(s.radii[i], dim) * s.offsets[i];
       m += std::pow(s.radii[i], dim);
-      if (dim == 2) EXPECT_EQ(s.offsets[i].y(), 0.0);
+      if (dim == 2) {
+        EXPECT_EQ(s.offsets[i].y(), 0.0);
+      }
       int touching = 0;
       for (std::size_t j = 0; j < s.size(); ++j) {
         if (i == j) continue;

@@ -9,11 +9,15 @@
 #include <map>
 #include <random>
 
+#include "containers.h"
 #include "btr/deposition.h"
 #include "btr/force_network.h"
 
 namespace btr {
 namespace {
+
+using test::box;
+using test::periodic;
 
 Grain grain(double x, double y, double z, double r) {
   Grain g;
@@ -22,19 +26,7 @@ Grain grain(double x, double y, double z, double r) {
   return g;
 }
 
-Container box(double sx, double sy) {
-  Container c;
-  c.kind = ContainerKind::Box;
-  c.size_x = sx;
-  c.size_y = sy;
-  return c;
-}
 
-Container periodic(double sx, double sy) {
-  Container c = box(sx, sy);
-  c.kind = ContainerKind::Periodic;
-  return c;
-}
 
 // Weights proportional to r^3 (one density), in newtons of order 1e-5.
 std::vector<double> weights_of(const Grains& g) {

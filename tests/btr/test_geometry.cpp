@@ -9,11 +9,15 @@
 
 #include <Eigen/Geometry>
 
+#include "containers.h"
 #include "btr/check.h"
 #include "btr/deposition.h"
 
 namespace btr {
 namespace {
+
+using test::box;
+using test::periodic;
 
 constexpr double kRel = 1e-9;  // tolerance relative to the largest radius of the case
 
@@ -73,13 +77,6 @@ Vec3 upper_trilateration(const Vec3& c1, double d1, const Vec3& c2, double d2, c
   return p1.z() > p2.z() ? p1 : p2;
 }
 
-Container box(double sx, double sy = 0) {
-  Container c;
-  c.kind = ContainerKind::Box;
-  c.size_x = sx;
-  c.size_y = sy;
-  return c;
-}
 
 // ---------------------------------------------------------------------------------------------
 // Fall

@@ -3,10 +3,14 @@
 
 #include <cmath>
 
+#include "containers.h"
 #include "btr/metrics.h"
 
 namespace btr {
 namespace {
+
+using test::box;
+using test::periodic;
 
 constexpr double kPi = 3.14159265358979323846;
 
@@ -97,13 +101,6 @@ TEST(GrainVolume, DiskSegmentsAndQuadrants) {
 
 // ------------------------------------------------------------ lattices
 
-Container periodic(double lx, double ly) {
-  Container c;
-  c.kind = ContainerKind::Periodic;
-  c.size_x = lx;
-  c.size_y = ly;
-  return c;
-}
 
 // Simple cubic block: n x n columns filling the period / box, nz layers resting on the floor.
 Grains simple_cubic(int n, int nz, double r, double shift) {
