@@ -65,5 +65,11 @@ def test_eq9_fit_recovers_known_parameters():
     fit, why = hele_shaw.fit_eq9(w, theta)
     assert fit is not None, why
     assert abs(fit["theta_inf"] - 24.0) < 1e-6 and abs(fit["alpha"] + 0.5) < 1e-6 and abs(fit["l_d"] - 2.5) < 1e-6
+    assert fit["determined"]
+    # Flat, then falling without levelling off (as measured at w <= 10 d): no plateau to pin theta_inf.
+    flat_then_falling = np.array([25.7, 25.5, 25.9, 25.2, 23.0, 20.0])
+    fit, why = hele_shaw.fit_eq9([1.5, 2, 3, 5, 7, 10], flat_then_falling)
+    assert fit is not None, why
+    assert not fit["determined"], fit
     fit, why = hele_shaw.fit_eq9(w[:3], theta[:3])
     assert fit is None and "at least 4" in why

@@ -152,9 +152,13 @@ def fit_eq9(w_d, theta):
         p, cov = curve_fit(f, w_d, theta, p0=[float(np.min(theta)), -0.3, 2.0], maxfev=20000)
     except Exception as e:  # noqa: BLE001 - a fit that does not converge is reported, not fatal
         return None, f"no convergence ({e})"
-    err = np.sqrt(np.diag(cov)) if np.all(np.isfinite(cov)) else [float("nan")] * 3
+    err = np.sqrt(np.diag(cov)) if np.all(np.isfinite(cov)) else np.full(3, np.nan)
+    # Angles that do not level off within the widths leave the three parameters unconstrained: the fit
+    # then trades theta_inf against alpha and l, and the errors exceed the values.
+    determined = bool(np.all(np.isfinite(err)) and np.all(err < np.abs(p)))
     return {"theta_inf": p[0], "alpha": p[1], "l_d": p[2], "theta_inf_err": err[0], "alpha_err": err[1],
-            "l_d_err": err[2], "rms_deg": float(np.sqrt(np.mean((f(w_d, *p) - theta) ** 2))), "points": len(w_d)}, ""
+            "l_d_err": err[2], "rms_deg": float(np.sqrt(np.mean((f(w_d, *p) - theta) ** 2))), "points": len(w_d),
+            "determined": determined}, ""
 
 
 FIELDS = ["stage", "d_mm", "w_d", "n", "method", "theta_deg", "z_mean", "wall_s", "status", "reason", "heap_note"]
@@ -210,7 +214,9 @@ def _write_tables(out: Path, rows: list, fits: dict, n_sat, settings: dict):
         if fit:
             md.append(f"- {key}: theta_inf = {fit['theta_inf']:.2f} +- {fit['theta_inf_err']:.2f} deg, "
                       f"alpha = {fit['alpha']:.3f} +- {fit['alpha_err']:.3f}, l = {fit['l_d']:.2f} +- "
-                      f"{fit['l_d_err']:.2f} d (rms {fit['rms_deg']:.2f} deg, {fit['points']} points)")
+                      f"{fit['l_d_err']:.2f} d (rms {fit['rms_deg']:.2f} deg, {fit['points']} points)"
+                      + ("" if fit["determined"] else "; **not determined**: the errors exceed the values (the "
+                         "angles do not level off within these widths)"))
         else:
             md.append(f"- {key}: not fitted: {why}")
     md += ["", "Figures: theta_vs_n.png, theta_vs_w.png, coordination_vs_w.png, profiles.png", ""]
