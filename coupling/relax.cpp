@@ -438,8 +438,33 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
   return res;
 }
 
+namespace {
+
+// Rigid clusters (the cluster column) must stay rigid: YADE gets them as clumps. LIGGGHTS and the
+// pre-loaded start have no rule for them, and an open floor would remove single members of a clump.
+void check_clusters_supported(const Packing& packing, const Scene& scene, const std::string& engine,
+                              const RelaxSettings& settings) {
+  const auto clustered = std::find_if(packing.grains.begin(), packing.grains.end(), [](const Grain& g) { return g.cluster != 0; });
+  if (clustered == packing.grains.end()) return;
+  const std::string which = "the packing has rigid clusters (grain " +
+                            std::to_string(clustered - packing.grains.begin() + 1) + " is in cluster " +
+                            std::to_string(clustered->cluster) + ")";
+  if (engine == "liggghts")
+    throw RelaxRefused(which + ": exporting clusters to LIGGGHTS as rigid bodies is not implemented; relax "
+                       "them with --engine yade (clumps)");
+  if (settings.preload || scene.relax.preload)
+    throw RelaxRefused(which + ": the pre-loaded start has no force network for clusters (it splits each grain's "
+                       "load on that grain's own supports); relax without --preload");
+  if (scene.container.kind == ContainerKind::Open)
+    throw RelaxRefused(which + ": an open floor removes grains one by one as they leave, which would break clumps; "
+                       "relax them in a container with walls");
+}
+
+}  // namespace
+
 std::vector<std::string> export_inputs(const Packing& packing, const Scene& scene, const std::string& engine,
                                        const RelaxSettings& settings, const std::string& dir) {
+  check_clusters_supported(packing, scene, engine, settings);
   const auto adapter = make_adapter(engine);
   IntendedOverlaps intended;
   const Packing start = starting_packing(packing, scene, settings, intended, dir);
@@ -449,14 +474,7 @@ std::vector<std::string> export_inputs(const Packing& packing, const Scene& scen
 
 RelaxResult relax(const Packing& packing, const Scene& scene, const std::string& engine,
                   const RelaxSettings& settings, const std::string& out_dir) {
-  // Relaxing the members of rigid clusters as free grains would let the clusters fall apart; neither
-  // engine's export of clusters as rigid bodies (YADE clumps, a LIGGGHTS rigid-body fix) exists yet.
-  for (const Grain& g : packing.grains)
-    if (g.cluster != 0)
-      throw std::invalid_argument("the packing has rigid clusters (grain with cluster " + std::to_string(g.cluster) +
-                                  "): relaxing clusters with " + engine +
-                                  " is not supported (no export of clusters as rigid bodies: YADE clumps and a "
-                                  "LIGGGHTS rigid-body fix are not implemented)");
+  check_clusters_supported(packing, scene, engine, settings);
   const auto adapter = make_adapter(engine);
   IntendedOverlaps intended;
   const Packing start = starting_packing(packing, scene, settings, intended, out_dir);

@@ -5,6 +5,7 @@
 // opens a TCP Python console (port 9000+) and an XML-RPC server (port 21000+, every interface) at each
 // start, and a run started by btr must not expose a Python console to the network. The script still runs
 // unchanged with `yade -n -x relax_yade.py` for users who prefer the launcher (e.g. on a cluster).
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
@@ -17,14 +18,19 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// The packing for the script: id,x,y,z,radius,species, and a cluster column (0 = a free grain) when the
+// packing has rigid clusters, which the script makes clumps.
 std::string packing_csv(const Packing& packing) {
-  std::string out = "id,x,y,z,radius,species\n";
-  char line[256];
+  const bool clusters = std::any_of(packing.grains.begin(), packing.grains.end(), [](const Grain& g) { return g.cluster != 0; });
+  std::string out = clusters ? "id,x,y,z,radius,species,cluster\n" : "id,x,y,z,radius,species\n";
+  char line[288];
   for (std::size_t i = 0; i < packing.grains.size(); ++i) {
     const Grain& g = packing.grains[i];
-    std::snprintf(line, sizeof line, "%zu,%.17g,%.17g,%.17g,%.17g,%d\n", i + 1, g.x.x(), g.x.y(), g.x.z(), g.r,
-                  g.species);
-    out += line;
+    int n = std::snprintf(line, sizeof line, "%zu,%.17g,%.17g,%.17g,%.17g,%d", i + 1, g.x.x(), g.x.y(), g.x.z(), g.r,
+                          g.species);
+    if (clusters) n += std::snprintf(line + n, sizeof line - n, ",%d", static_cast<int>(g.cluster));
+    out.append(line, static_cast<std::size_t>(n));
+    out += '\n';
   }
   return out;
 }

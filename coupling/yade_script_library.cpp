@@ -76,6 +76,7 @@ _species = {}        # species -> material id
 _pairs = []          # (material id, material id, restitution, friction)
 _grains = []         # [(packing id, body id)] in packing order
 _walls = []          # body ids of walls, facets and the periodic floor
+_clumps = []         # body ids of the clumps (rigid clusters), one per cluster of the packing
 _cell = None         # (Lx, Ly, Lz) when periodic
 _rolling = None      # dict(krot=, eta=) for the Hertz-Mindlin moment law; None = no rolling term
 _removed = []        # packing ids of grains removed because they left REGION (open floor), in removal order
@@ -115,36 +116,58 @@ def periodic_cell(lx, ly, lz):
 
 
 def add_grains(csv_name):
-    bodies = []
-    ids = []
+    """The grains of the packing: id,x,y,z,radius,species[,cluster]. Grains of one cluster (cluster > 0) become
+    one clump (O.bodies.appendClumped): a rigid body whose members keep their relative positions; YADE makes
+    no contact between members of one clump. Every grain keeps its packing id (_grains maps it to its body)."""
+    free = []      # (packing id, body)
+    clusters = {}  # cluster -> [(packing id, body)]
     with open(path(csv_name)) as f:
         header = f.readline().strip()
-        if header != "id,x,y,z,radius,species":
-            raise RunFailure("%s: header is %r, expected 'id,x,y,z,radius,species'" % (csv_name, header))
+        with_clusters = header == "id,x,y,z,radius,species,cluster"
+        if header != "id,x,y,z,radius,species" and not with_clusters:
+            raise RunFailure("%s: header is %r, expected 'id,x,y,z,radius,species[,cluster]'" % (csv_name, header))
+        expected = header
+        count = 0
         for n, line in enumerate(f, start=2):
             if not line.strip():
                 continue
             try:
-                gid, x, y, z, r, sp = line.split(",")
-                gid, x, y, z, r, sp = int(gid), float(x), float(y), float(z), float(r), int(sp)
+                fields = line.split(",")
+                if len(fields) != (7 if with_clusters else 6):
+                    raise ValueError()
+                gid, x, y, z, r, sp = int(fields[0]), float(fields[1]), float(fields[2]), float(fields[3]), \
+                    float(fields[4]), int(fields[5])
+                cluster = int(fields[6]) if with_clusters else 0
             except ValueError:
-                raise RunFailure("%s line %d: expected id,x,y,z,radius,species, got %r" % (csv_name, n, line.strip()))
-            if gid != len(ids) + 1:
-                raise RunFailure("%s line %d: id %d, expected %d (ids are 1..N in order)" % (csv_name, n, gid, len(ids) + 1))
-            if not all(math.isfinite(v) for v in (x, y, z, r)) or r <= 0.0:
-                raise RunFailure("%s line %d: non-finite value or radius <= 0" % (csv_name, n))
+                raise RunFailure("%s line %d: expected %s, got %r" % (csv_name, n, expected, line.strip()))
+            if gid != count + 1:
+                raise RunFailure("%s line %d: id %d, expected %d (ids are 1..N in order)" % (csv_name, n, gid, count + 1))
+            count += 1
+            if not all(math.isfinite(v) for v in (x, y, z, r)) or r <= 0.0 or cluster < 0:
+                raise RunFailure("%s line %d: non-finite value, radius <= 0 or cluster < 0" % (csv_name, n))
             if sp not in _species:
                 raise RunFailure("%s line %d: species %d has no material" % (csv_name, n, sp))
             b = utils.sphere((x, y, z), r, material=_species[sp], color=(0.8, 0.6, 0.2))
-            if DIMENSION == 2:
-                # Disks in the x-z plane: no motion along y, rotation about y only.
-                b.state.blockedDOFs = "yXZ"
-            bodies.append(b)
-            ids.append(gid)
-    if not ids:
+            if cluster == 0:
+                free.append((gid, b))
+            else:
+                clusters.setdefault(cluster, []).append((gid, b))
+    if count == 0:
         raise RunFailure("%s has no grains" % csv_name)
-    body_ids = O.bodies.append(bodies)
-    _grains.extend(zip(ids, body_ids))
+    body_of = {}
+    for gid, bid in zip((g for g, _ in free), O.bodies.append([b for _, b in free])):
+        body_of[gid] = bid
+        if DIMENSION == 2:
+            # Disks in the x-z plane: no motion along y, rotation about y only.
+            O.bodies[bid].state.blockedDOFs = "yXZ"
+    for cluster in sorted(clusters):
+        members = clusters[cluster]
+        clump, member_ids = O.bodies.appendClumped([b for _, b in members])
+        _clumps.append(clump)
+        if DIMENSION == 2:
+            O.bodies[clump].state.blockedDOFs = "yXZ"  # the clump is what NewtonIntegrator moves
+        body_of.update(zip((g for g, _ in members), member_ids))
+    _grains.extend((gid, body_of[gid]) for gid in range(1, count + 1))
 
 
 def add_plane(axis, position):
@@ -235,6 +258,10 @@ def write_outputs():
             continue
         p, v = b.state.pos, b.state.vel
         x, y = p[0], p[1]
+        if DIMENSION == 2 and b.isClumpMember and abs(y) < 1e-9 * b.shape.radius:
+            # A clump member's position is its clump's rotated by a quaternion: round-off off the x-z
+            # plane (~1e-16 r; the clump's DOFs out of the plane are blocked). A larger y is reported.
+            y = 0.0
         if _cell is not None:
             x = wrap(x, _cell[0])
             if DIMENSION == 3:
@@ -262,7 +289,7 @@ def write_status(status, reason, message, wall):
         "steps_per_second": steps / wall if wall > 0 else 0.0,
         "loop_seconds": _loop_seconds,
         "loop_steps_per_second": steps / _loop_seconds if _loop_seconds > 0 else 0.0,
-        "grains": len(_grains), "bodies": len(O.bodies), "threads": O.numThreads,
+        "grains": len(_grains), "clumps": len(_clumps), "bodies": len(O.bodies), "threads": O.numThreads,
         "yade_version": getattr(yade.config, "version", "unknown"), "model": MODEL,
         "stop_value": _rule.value if _rule is not None else None,
         "final_unbalanced_force": _final_unbalanced,
@@ -410,8 +437,8 @@ def relax():
     global _rule, _loop_seconds
     build_engines()
     O.dt = TIMESTEP
-    log("YADE %s, %d threads, model %s, %d grains, %d wall bodies" % (
-        getattr(yade.config, "version", "?"), O.numThreads, MODEL, len(_grains), len(_walls)))
+    log("YADE %s, %d threads, model %s, %d grains (%d clumps), %d wall bodies" % (
+        getattr(yade.config, "version", "?"), O.numThreads, MODEL, len(_grains), len(_clumps), len(_walls)))
     log("time step %.6g s: %s (YADE's P-wave estimate: %.6g s)" % (TIMESTEP, TIMESTEP_RULE, utils.PWaveTimeStep()))
     log("stop rule %s (kinetic %.6g J, unbalanced force %.6g, displacement %.6g m) every %d steps, from t >= %.6g s; "
         "at most %d checks; blow-up above %.6g J; damping %.6g" % (

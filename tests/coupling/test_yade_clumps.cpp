@@ -1,0 +1,114 @@
+// Rigid clusters in the DEM coupling: YADE relaxes them as clumps (run for real), members keep their
+// ids, cluster numbers and relative positions; what cannot keep a cluster rigid is refused.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <set>
+#include <string>
+
+#include "btr/redeposition.h"
+#include "coupling/relax.h"
+#include "coupling/relax_plan.h"
+#include "coupling/yade_script.h"
+#include "relax_fixtures.h"
+#include "relaxation_checks.h"
+
+namespace {
+
+// A BTR deposit of random compact clusters of three grains (btr::Redeposition's first deposit) in a box.
+btr::Packing cluster_packing(btr::Scene& scene, int dimension, int count) {
+  scene = btr_test::make_scene("clumps" + std::to_string(dimension) + "d", dimension,
+                               btr_test::container(btr::ContainerKind::Box, 0.012, 0.012));
+  scene.grains.count = count;
+  scene.grains.components[0].material.young = 1e7;  // a longer stable step: a short test
+  scene.clusters = btr::ClustersSpec{3, 10.0, 0};
+  btr::Redeposition redeposition(scene, 5);
+  btr::Packing p;
+  p.grains = redeposition.initial();
+  p.meta = {{"scene", btr::scene_to_json(scene)}, {"dimension", dimension}};
+  return p;
+}
+
+std::map<std::int32_t, std::vector<std::size_t>> members_of(const btr::Grains& g) {
+  std::map<std::int32_t, std::vector<std::size_t>> m;
+  for (std::size_t i = 0; i < g.size(); ++i)
+    if (g[i].cluster != 0) m[g[i].cluster].push_back(i);
+  return m;
+}
+
+}  // namespace
+
+TEST(YadeClumps, ClustersRelaxAsRigidClumps) {
+  if (!btr_test::have_engine("yade")) GTEST_SKIP() << "yade Python module not installed";
+  for (int dimension : {3, 2}) {
+    SCOPED_TRACE(std::to_string(dimension) + "D");
+    btr::Scene scene;
+    const btr::Packing in = cluster_packing(scene, dimension, dimension == 3 ? 90 : 60);
+    const auto clusters = members_of(in.grains);
+    ASSERT_GE(clusters.size(), 10u);
+    const std::string dir = btr_test::fresh_dir("yade_clumps_" + std::to_string(dimension));
+    const btr::RelaxResult r = btr::relax(in, scene, "yade", {}, dir);
+
+    EXPECT_EQ(r.stop_reason, "kinetic-energy");
+    const auto status = nlohmann::json::parse(btr_test::read_text(dir + "/" + btr::yade_files::kStatus));
+    EXPECT_EQ(status["clumps"], clusters.size());
+    const btr::Grains& out = r.relaxed.grains;
+    ASSERT_EQ(out.size(), in.grains.size());
+    double largest_move = 0.0, r_min = INFINITY;
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      EXPECT_EQ(out[i].cluster, in.grains[i].cluster) << "grain " << i + 1;
+      EXPECT_EQ(out[i].r, in.grains[i].r) << "grain " << i + 1;
+      if (dimension == 2) {
+        EXPECT_EQ(out[i].x.y(), 0.0) << "grain " << i + 1;
+      }
+      largest_move = std::max(largest_move, (out[i].x - in.grains[i].x).norm());
+      r_min = std::min(r_min, out[i].r);
+    }
+    // The clumps moved (settled onto each other and the floor) ...
+    EXPECT_GT(largest_move, 1e-4 * r_min);
+    // ... as rigid bodies: every distance between two members of one cluster is unchanged.
+    double worst = 0.0;
+    for (const auto& [id, m] : clusters)
+      for (std::size_t a = 0; a < m.size(); ++a)
+        for (std::size_t b = a + 1; b < m.size(); ++b)
+          worst = std::max(worst, std::abs((out[m[a]].x - out[m[b]].x).norm() - (in.grains[m[a]].x - in.grains[m[b]].x).norm()));
+    EXPECT_LT(worst, 1e-9 * r_min);
+    // No contact inside a clump; contacts between clumps and with the walls carry the weight.
+    std::size_t between = 0;
+    for (const auto& c : r.contacts) {
+      if (c.j == 0) continue;
+      const auto ci = out[c.i - 1].cluster, cj = out[c.j - 1].cluster;
+      EXPECT_FALSE(ci != 0 && ci == cj) << "contact " << c.i << "-" << c.j << " inside cluster " << ci;
+      between += ci != cj;
+    }
+    EXPECT_GT(between, 0u);
+    EXPECT_LT(btr_test::largest_pair_overlap(out, scene.container, dimension), 0.05);
+  }
+}
+
+TEST(YadeClumps, WhatCannotKeepAClusterRigidIsRefused) {
+  btr::Scene scene;
+  const btr::Packing in = cluster_packing(scene, 3, 30);
+  const std::string dir = btr_test::fresh_dir("clumps_refused");
+  auto refusal = [&](const btr::Scene& s, const std::string& engine, const btr::RelaxSettings& settings) {
+    try {
+      btr::export_inputs(in, s, engine, settings, dir);
+    } catch (const btr::RelaxRefused& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  EXPECT_NE(refusal(scene, "liggghts", {}).find("rigid clusters"), std::string::npos);
+  btr::RelaxSettings preload;
+  preload.preload = true;
+  EXPECT_NE(refusal(scene, "yade", preload).find("pre-loaded start"), std::string::npos);
+  btr::Scene open = scene;
+  open.container = btr_test::container(btr::ContainerKind::Open);
+  EXPECT_NE(refusal(open, "yade", {}).find("open floor"), std::string::npos);
+  // The same packing without its cluster column is an ordinary packing for LIGGGHTS.
+  btr::Packing loose = in;
+  for (btr::Grain& g : loose.grains) g.cluster = 0;
+  EXPECT_NO_THROW(btr::export_inputs(loose, scene, "liggghts", {}, dir));
+  EXPECT_EQ(refusal(scene, "yade", {}), "(accepted)");
+}
