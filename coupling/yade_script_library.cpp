@@ -162,6 +162,14 @@ def add_grains(csv_name):
             O.bodies[bid].state.blockedDOFs = "yXZ"
     for cluster in sorted(clusters):
         members = clusters[cluster]
+        if _cell is not None:
+            # The packing wraps every member into the cell on its own; a clump needs its members together:
+            # each at the periodic image nearest the first member.
+            ref = members[0][1].state.pos
+            for _, b in members[1:]:
+                p = b.state.pos
+                b.state.pos = (p[0] - _cell[0] * round((p[0] - ref[0]) / _cell[0]),
+                               p[1] - _cell[1] * round((p[1] - ref[1]) / _cell[1]) if DIMENSION == 3 else p[1], p[2])
         clump, member_ids = O.bodies.appendClumped([b for _, b in members])
         _clumps.append(clump)
         if DIMENSION == 2:
