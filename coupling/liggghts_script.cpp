@@ -3,10 +3,12 @@
 #include "coupling/liggghts_script.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <sstream>
 
 #include "coupling/dem_walls.h"
@@ -160,20 +162,53 @@ std::vector<std::string> wall_force_columns(const DemWall& w) {
   return {f + "[" + std::to_string(w.axis + 1) + "]"};
 }
 
+bool has_clusters(const Grains& grains) {
+  return std::any_of(grains.begin(), grains.end(), [](const Grain& g) { return g.cluster != 0; });
+}
+
+// Image flags that put every member of a cluster at the periodic image nearest its first member: the
+// packing wraps members into the cell one by one, fix rigid unwraps them with these flags.
+std::vector<std::array<int, 3>> cluster_images(const Grains& grains, const Container& c) {
+  std::vector<std::array<int, 3>> image(grains.size(), {0, 0, 0});
+  if (c.kind != ContainerKind::Periodic) return image;
+  std::map<std::int32_t, std::size_t> first;
+  for (std::size_t i = 0; i < grains.size(); ++i) {
+    if (grains[i].cluster == 0) continue;
+    const auto [it, inserted] = first.emplace(grains[i].cluster, i);
+    if (inserted) continue;
+    const Vec3 d = grains[i].x - grains[it->second].x;
+    image[i][0] = -static_cast<int>(std::lround(d.x() / c.size_x));
+    if (c.size_y > 0) image[i][1] = -static_cast<int>(std::lround(d.y() / c.size_y));
+  }
+  return image;
+}
+
 std::string data_file(const Packing& packing, const Scene& scene, const Box& box, int n_types) {
+  const bool clusters = has_clusters(packing.grains);
   std::ostringstream out;
-  out << "LIGGGHTS data file written by btr-dem: packing of scene '" << scene.name << "' (atom_style granular)\n\n";
+  out << "LIGGGHTS data file written by btr-dem: packing of scene '" << scene.name << "' (atom_style "
+      << (clusters ? "hybrid granular molecular: the molecule is the grain's rigid cluster, 0 for a free grain" : "granular")
+      << ")\n\n";
   out << packing.grains.size() << " atoms\n" << n_types << " atom types\n\n";
   static const char* names[] = {"xlo xhi", "ylo yhi", "zlo zhi"};
   for (int a = 0; a < 3; ++a) out << g17(box.lo[a]) << " " << g17(box.hi[a]) << " " << names[a] << "\n";
   out << "\nAtoms\n\n";
-  char row[256];
+  const auto image = clusters ? cluster_images(packing.grains, scene.container) : std::vector<std::array<int, 3>>{};
+  // fix rigid refuses a body of one atom: a cluster of one grain is a free grain (molecule 0).
+  std::map<std::int32_t, int> size;
+  for (const Grain& g : packing.grains) ++size[g.cluster];
+  char row[320];
   for (std::size_t i = 0; i < packing.grains.size(); ++i) {
     const Grain& g = packing.grains[i];
     const int ci = component_index(scene, g.species);
-    // id type diameter density x y z
-    std::snprintf(row, sizeof row, "%zu %d %.17g %.17g %.17g %.17g %.17g\n", i + 1, ci + 1, 2.0 * g.r,
-                  scene.grains.components[ci].density, g.x.x(), g.x.y(), g.x.z());
+    const double density = scene.grains.components[ci].density;
+    if (clusters)  // id type x y z diameter density molecule ix iy iz
+      std::snprintf(row, sizeof row, "%zu %d %.17g %.17g %.17g %.17g %.17g %d %d %d %d\n", i + 1, ci + 1, g.x.x(), g.x.y(),
+                    g.x.z(), 2.0 * g.r, density, size[g.cluster] > 1 ? static_cast<int>(g.cluster) : 0, image[i][0],
+                    image[i][1], image[i][2]);
+    else  // id type diameter density x y z
+      std::snprintf(row, sizeof row, "%zu %d %.17g %.17g %.17g %.17g %.17g\n", i + 1, ci + 1, 2.0 * g.r, density,
+                    g.x.x(), g.x.y(), g.x.z());
     out << row;
   }
   return out.str();
@@ -252,6 +287,7 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   const bool hooke = scene.relax.model == "hooke";
   const bool stiffness = scene.relax.model == "hooke-stiffness";
   const bool rolling = uses_rolling_friction(scene);
+  const bool clusters = has_clusters(grains);
   const std::string models = std::string("model ") + (stiffness ? "hooke/stiffness" : hooke ? "hooke" : "hertz") +
                              " tangential history" +
                              (rolling ? " rolling_friction epsd2" : "");
@@ -289,7 +325,7 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
     s << "#\n# 2D packing: the disks are relaxed as spheres of the same radii whose centres stay in y = 0\n"
       << "# (fix btr_plane zeroes the y force; contact normals and torques then stay in the x-z plane).\n";
   s << "\n"
-    << "atom_style      granular\n"
+    << "atom_style      " << (clusters ? "hybrid granular molecular" : "granular") << "\n"
     << "atom_modify     map array\n"
     << "boundary        " << box.boundary << "\n"
     << "newton          off\n"
@@ -297,9 +333,14 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
     << "units           si\n"
     // A settled bed split along z puts nearly every grain on one rank: split only laterally.
     << "processors      " << (dim == 2 ? "* 1 1" : "* * 1") << "\n"
-    << "read_data       " << kLiggghtsData << "\n"
-    << "neighbor        " << g17(0.5 * r_min) << " bin\n"
-    << "neigh_modify    delay 0\n";
+    << "read_data       " << kLiggghtsData << "\n";
+  if (clusters)
+    s << "# Rigid clusters: the grains of one molecule move as one rigid body (fix btr_rigid) and do not\n"
+      << "# interact with each other (neigh_modify exclude); free grains (molecule 0) are integrated alone.\n"
+      << "group           btr_clustered molecule > 0\n"
+      << "group           btr_free subtract all btr_clustered\n";
+  s << "neighbor        " << g17(0.5 * r_min) << " bin\n"
+    << "neigh_modify    delay 0" << (clusters ? " exclude molecule btr_clustered" : "") << "\n";
   // LIGGGHTS refuses Young's moduli outside [5e6, 1e9] Pa in SI units unless told otherwise.
   if (y_min < 5e6) s << "soft_particles  yes\n";
   if (y_max > 1e9) s << "hard_particles  yes\n";
@@ -358,7 +399,11 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
     s << "\n";
   }
   if (dim == 2) s << "fix btr_plane all setforce NULL 0.0 NULL   # after the walls and gravity\n";
-  s << "fix btr_integrate all nve/sphere\n\n";
+  if (clusters)
+    s << "fix btr_integrate btr_free nve/sphere\n"
+      << "fix btr_rigid btr_clustered rigid molecule\n\n";
+  else
+    s << "fix btr_integrate all nve/sphere\n\n";
 
   // Rotation is left out on purpose: a grain spinning about its contact normal meets no resistance
   // in these contact models (not even with rolling friction) and would keep E up forever without

@@ -440,8 +440,9 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
 
 namespace {
 
-// Rigid clusters (the cluster column) must stay rigid: YADE gets them as clumps. LIGGGHTS and the
-// pre-loaded start have no rule for them, and an open floor would remove single members of a clump.
+// Rigid clusters (the cluster column) must stay rigid: YADE gets them as clumps, LIGGGHTS as rigid bodies
+// (fix rigid molecule). The pre-loaded start has no rule for them, an open floor would remove single members
+// of a clump, and LIGGGHTS' unbalanced force is summed per atom, not per rigid body.
 void check_clusters_supported(const Packing& packing, const Scene& scene, const std::string& engine,
                               const RelaxSettings& settings) {
   const auto clustered = std::find_if(packing.grains.begin(), packing.grains.end(), [](const Grain& g) { return g.cluster != 0; });
@@ -449,9 +450,10 @@ void check_clusters_supported(const Packing& packing, const Scene& scene, const 
   const std::string which = "the packing has rigid clusters (grain " +
                             std::to_string(clustered - packing.grains.begin() + 1) + " is in cluster " +
                             std::to_string(clustered->cluster) + ")";
-  if (engine == "liggghts")
-    throw RelaxRefused(which + ": exporting clusters to LIGGGHTS as rigid bodies is not implemented; relax "
-                       "them with --engine yade (clumps)");
+  if (engine == "liggghts" && scene.relax.stop_rule == "unbalanced-force")
+    throw RelaxRefused(which + ": LIGGGHTS' unbalanced force is a mean over atoms, and a member of a rigid body at "
+                       "rest still carries a resultant (the body's is zero); use the kinetic-energy or displacement "
+                       "rule, or --engine yade");
   if (settings.preload || scene.relax.preload)
     throw RelaxRefused(which + ": the pre-loaded start has no force network for clusters (it splits each grain's "
                        "load on that grain's own supports); relax without --preload");
