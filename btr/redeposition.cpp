@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "btr/cluster.h"
+#include "btr/cluster_list.h"
 #include "btr/deposition.h"
 #include "btr/drops.h"
 #include "btr/metrics.h"
@@ -113,6 +114,11 @@ Grains Redeposition::drop_all(const std::vector<ClusterShape>& shapes) {
 }
 
 Grains Redeposition::initial() {
+  if (!scene_.clusters->file.empty()) {  // the listed clusters, in file order
+    const std::vector<ClusterShape> shapes = read_cluster_list(scene_.clusters->file, scene_.dimension);
+    for (const ClusterShape& s : shapes) r_max_ = std::max(r_max_, *std::max_element(s.radii.begin(), s.radii.end()));
+    return drop_all(shapes);
+  }
   DropSequence drops(scene_, seed_);
   r_max_ = drops.r_max();
   const std::int64_t n = drops.count(), size = scene_.clusters->size;

@@ -114,6 +114,8 @@ struct ClustersSpec {
   std::int64_t size = 3;
   double block = 50.0;      // mean grain diameters
   std::int64_t cycles = 0;
+  std::string file;         // cluster list (cluster_list.h), resolved against the scene's folder; empty: random
+                            // compact clusters of `size`
 };
 
 struct Scene {

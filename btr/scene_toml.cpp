@@ -11,6 +11,7 @@
 #include <set>
 #include <toml++/toml.h>
 
+#include "btr/cluster_list.h"
 #include "btr/drop_list.h"
 #include "btr/toml_reader.h"
 
@@ -128,7 +129,7 @@ class SceneParser {
   void parse_clusters() {
     auto s = rd_.table(root_, "clusters", "[clusters]");
     if (!s) return;
-    rd_.check_keys(*s, {"size", "block", "cycles"});
+    rd_.check_keys(*s, {"size", "block", "cycles", "file"});
     const ContainerKind kind = scene_.container.kind;
     if (kind != ContainerKind::Box && kind != ContainerKind::Periodic)
       rd_.fail(s->line, "[clusters]: expected container.kind = \"box\" or \"periodic\" (clusters are dropped at "
@@ -140,6 +141,28 @@ class SceneParser {
     c.block = rd_.number_or(*s, "block", c.block, positive, "a positive block size in mean grain diameters");
     c.cycles = rd_.integer(*s, "cycles", [](std::int64_t v) { return v >= 0; }, "a number of cycles >= 0")
                    .value_or(c.cycles);
+    if (auto file = rd_.string(*s, "file", "a CSV file name (relative to the scene file's folder)")) {
+      const int line = Reader::line_of(*rd_.get(*s, "file"));
+      if (rd_.get(*s, "size"))
+        rd_.fail(line, "[clusters]: give either size (random compact clusters) or file (a cluster list), not both");
+      namespace fs = std::filesystem;
+      fs::path p(*file);
+      if (p.is_relative()) p = fs::path(path_).parent_path() / p;
+      c.file = p.lexically_normal().string();
+      if (!std::ifstream(c.file)) rd_.fail(line, "clusters.file: cannot open '" + c.file + "'");
+      // The list decides the grains: their number must be the scene's count, their species the scene's.
+      std::int64_t rows = 0;
+      for (const ClusterShape& shape : read_cluster_list(c.file, dim())) {
+        rows += static_cast<std::int64_t>(shape.size());
+        for (int sp : shape.species)
+          if (std::none_of(scene_.grains.components.begin(), scene_.grains.components.end(),
+                           [&](const Component& k) { return k.species == sp; }))
+            throw SceneError(c.file + ": species " + std::to_string(sp) + " is not a species of the scene " + path_);
+      }
+      if (scene_.grains.count != rows)
+        rd_.fail(line, "clusters.file: " + c.file + " lists " + std::to_string(rows) + " grains, but grains.count is " +
+                           std::to_string(scene_.grains.count) + "; set grains.count = " + std::to_string(rows));
+    }
     scene_.clusters = c;
   }
 

@@ -5,7 +5,9 @@
 #include <filesystem>
 #include <fstream>
 
+#include "btr/cluster_check.h"
 #include "btr/drops.h"
+#include "btr/redeposition.h"
 #include "btr/scene_toml.h"
 
 namespace btr {
@@ -92,6 +94,60 @@ TEST_F(SceneFile, BaseSceneLoads) {
   EXPECT_EQ(s.container.kind, ContainerKind::Box);
   EXPECT_DOUBLE_EQ(s.container.size_y, 0.02);
   EXPECT_EQ(s.source.kind, SourceSpec::Kind::Rain);
+}
+
+// A dimer and an equilateral trimer of touching 1 mm grains, in a frame of their own.
+const std::string kClusterList = R"(cluster,x,y,z,radius,species
+7,0.0,0.0,0.0,1e-3,1
+7,2e-3,0.0,0.0,1e-3,1
+3,5.0,5.0,5.0,1e-3,1
+3,5.002,5.0,5.0,1e-3,1
+3,5.001,5.0017320508075689,5.0,1e-3,1
+)";
+
+TEST_F(SceneFile, ClusterListIsDroppedAsListed) {
+  write("clusters.csv", kClusterList);
+  const std::string text = replace(kBase, "count = 100", "count = 5") + "\n[clusters]\nfile = \"clusters.csv\"\n";
+  path_ = write("x.toml", text);
+  const Scene s = load_scene(path_);
+  ASSERT_TRUE(s.clusters.has_value());
+  EXPECT_EQ(fs::path(s.clusters->file), dir_ / "clusters.csv");
+  Redeposition redeposition(s, 3);
+  const Grains g = redeposition.initial();
+  ASSERT_EQ(g.size(), 5u);
+  const auto bodies = rigid_bodies(g);
+  ASSERT_EQ(bodies.size(), 2u);
+  EXPECT_EQ(bodies[0].size() + bodies[1].size(), 5u);
+  // Every pair of members is as far apart as in the file (the grains touch: 2 radii).
+  for (const auto& b : bodies)
+    for (std::size_t i = 0; i < b.size(); ++i)
+      for (std::size_t j = i + 1; j < b.size(); ++j) EXPECT_NEAR((g[b[i]].x - g[b[j]].x).norm(), 2e-3, 1e-12);
+  const ClusterCheckReport rep = check_clusters(g, 3, s.container);
+  EXPECT_TRUE(rep.ok()) << rep.overlaps << " overlaps, " << rep.unsupported << " unsupported";
+}
+
+TEST_F(SceneFile, ClusterListErrorsNameTheFileAndLine) {
+  const std::string scene = replace(kBase, "count = 100", "count = 5") + "\n[clusters]\nfile = \"clusters.csv\"\n";
+  auto error_with_list = [&](const std::string& list, const std::string& text) {
+    write("clusters.csv", list);
+    return error_of(text);
+  };
+  const std::string list = (dir_ / "clusters.csv").string();
+  EXPECT_NE(error_with_list(replace(kClusterList, "cluster,x", "id,x"), scene).find(list + ":1: header"),
+            std::string::npos);
+  EXPECT_NE(error_with_list(replace(kClusterList, "7,2e-3,0.0,0.0", "7,1e-3,0.0,0.0"), scene)
+                .find(list + ":3: cluster 7: this grain overlaps the one of line 2"),
+            std::string::npos);
+  EXPECT_NE(error_with_list(replace(kClusterList, "5.001,5.0017320508075689,5.0,1e-3,1", "5.001,5.0017320508075689,5.0,1e-3,2"),
+                            scene).find("species 2 is not a species of the scene"),
+            std::string::npos);
+  const std::string wrong_count = error_with_list(kClusterList, replace(scene, "count = 5", "count = 6"));
+  EXPECT_NE(wrong_count.find("lists 5 grains, but grains.count is 6"), std::string::npos) << wrong_count;
+  EXPECT_NE(error_with_list(kClusterList, scene + "size = 3\n").find("either size"), std::string::npos);
+  // 2D: disks in the x-z plane.
+  const std::string scene2d =
+      replace(replace(scene, "dimension = 3", "dimension = 2"), "size = [0.02, 0.02]", "size = [0.02]");
+  EXPECT_NE(error_with_list(kClusterList, scene2d).find(list + ":4: y: expected 0 in 2D"), std::string::npos);
 }
 
 TEST(SceneInputs, EveryShippedSceneLoads) {

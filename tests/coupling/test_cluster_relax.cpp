@@ -23,7 +23,7 @@ btr::Packing cluster_packing(btr::Scene& scene, int dimension, int count,
   scene = btr_test::make_scene("clumps" + std::to_string(dimension) + "d", dimension, btr_test::container(kind, 0.012, 0.012));
   scene.grains.count = count;
   scene.grains.components[0].material.young = 1e7;  // a longer stable step: a short test
-  scene.clusters = btr::ClustersSpec{3, 10.0, 0};
+  scene.clusters = btr::ClustersSpec{3, 10.0, 0, ""};
   btr::Redeposition redeposition(scene, 5);
   btr::Packing p;
   p.grains = redeposition.initial();
