@@ -101,17 +101,21 @@ def test_size_study_new_methods_failed_count_and_reused_pours(tmp_path, btr_bina
     scene = tiny_bed_toml(tmp_path / "evr.toml", count=150, max_time=0.04)
     out = tmp_path / "sizes"
     error_runtime.run_size_study(scene, [0, 150], out, relax_times=[], pour_variants=[], margin=2.0,
-                                 progress=lambda m: None, methods=("target-phi", "shake", "preload"), shakes=3)
+                                 progress=lambda m: None, methods=("target-phi", "shake", "preload", "preload-damped"), shakes=3)
     study = json.loads((out / "size_study.json").read_text())
     assert [s["count"] for s in study["sizes"]] == [0, 150]
     small, ok = study["sizes"]
     assert small["status"] == "fail" and "deposit" in small["reason"], small
     assert ok["status"] == "ok" and ok["grains"] == 150, ok
     rows = {m["kind"]: m for m in ok["methods"]}
-    assert set(rows) == {"btr", "target", "shake", "preload"}
+    assert set(rows) == {"btr", "target", "shake", "preload", "preload-damped"}
     has_preload = "--preload" in btr_cli.help_text(btr_binary, "relax")
     if not has_preload:
         assert rows["preload"]["status"] == "fail" and "--preload" in rows["preload"]["reason"]
+    else:  # pre-loaded and damped: the relaxation ran with both options
+        assert rows["preload-damped"]["status"] == "ok", rows["preload-damped"]
+        relaxed = json.loads((out / "n150" / "relax_preload_damped0.5" / "relaxed.json").read_text())
+        assert relaxed["relax"]["damping"] == 0.5 and "preload" in relaxed, relaxed["relax"]
     for kind in ("btr", "target", "shake"):
         assert rows[kind]["status"] == "ok", rows[kind]
         assert rows[kind]["cost_ratio"] == pytest.approx(rows[kind]["wall_seconds"] / ok["reference_pour_wall_seconds"])
