@@ -344,26 +344,3 @@ TEST(RelaxChecks, LostGrainsAndNonFiniteValues) {
   };
   EXPECT_NE(g.failure().find("grain 4 has a non-finite position"), std::string::npos);
 }
-
-// A packing of rigid clusters is refused by both engines, before any input is written, naming why.
-TEST(RelaxCommon, PackingWithClustersIsRefused) {
-  btr::Packing p;
-  btr::Grain a, b;
-  a.x = btr::Vec3(0, 0, 1e-3);
-  b.x = btr::Vec3(2e-3, 0, 1e-3);
-  a.r = b.r = 1e-3;
-  a.cluster = b.cluster = 1;
-  p.grains = {a, b};
-  const auto dir = std::filesystem::temp_directory_path() / "btr_relax_clusters_refused";
-  std::filesystem::remove_all(dir);
-  for (const char* engine : {"liggghts", "yade"}) {
-    try {
-      btr::relax(p, btr::Scene{}, engine, btr::RelaxSettings{}, dir.string());
-      ADD_FAILURE() << engine << ": not refused";
-    } catch (const std::invalid_argument& e) {
-      EXPECT_NE(std::string(e.what()).find("rigid clusters"), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find(engine), std::string::npos) << e.what();
-    }
-  }
-  EXPECT_FALSE(std::filesystem::exists(dir));
-}
