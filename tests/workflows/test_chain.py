@@ -1,5 +1,6 @@
 """The README's chain (BTR -> relaxation -> comparison -> report) on a small scene, with each real engine."""
 import json
+from pathlib import Path
 import subprocess
 import sys
 
@@ -68,3 +69,14 @@ def test_failed_step_keeps_earlier_outputs(tmp_path, source_dir, btr_binary):
     assert run["status"] == "failed" and run["failed_step"] == "relax (liggghts)"
     assert run["steps"][0]["status"] == "ok" and run["steps"][1]["error"]
     assert (out / "btr" / "btr.csv").exists()
+
+
+def test_relative_output_folders_are_not_nested(tmp_path, source_dir, btr_binary, monkeypatch):
+    """btr runs in its output folder: a relative -o must still name the folder the caller meant."""
+    from btrdem import btr_cli
+    monkeypatch.chdir(tmp_path)
+    dep = btr_cli.deposit(btr_binary, str(source_dir / "inputs" / "bed3d.toml"), "rel/btr", count=50,
+                          progress=lambda *_: None)
+    assert Path(dep["csv"]) == tmp_path / "rel" / "btr" / "btr.csv"
+    assert (tmp_path / "rel" / "btr" / "btr.csv").is_file()
+    assert not (tmp_path / "rel" / "btr" / "rel").exists()

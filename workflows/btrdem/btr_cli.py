@@ -15,7 +15,7 @@ ENGINES = ("liggghts", "yade")
 def deposit(btr: str, scene_path: str, outdir, name: str = "btr", seed: int | None = None, count: int | None = None,
             progress=print, label: str = "deposit") -> dict:
     """btr deposit SCENE -o OUTDIR --name NAME [--seed] [--count]; returns {csv, wall_seconds, ...}."""
-    outdir = Path(outdir)
+    outdir = Path(outdir).absolute()  # the command runs in outdir: a relative -o would nest
     outdir.mkdir(parents=True, exist_ok=True)
     argv = [btr, "deposit", os.path.abspath(scene_path), "-o", str(outdir), "--name", name, "--quiet"]
     if seed is not None:
@@ -41,7 +41,7 @@ def relax(btr: str, packing_csv: str, engine: str, outdir, np: int = 1, timestep
     if engine not in ENGINES:
         raise StepFailed(f"relax: engine: expected one of {', '.join(ENGINES)}, got {engine!r}")
     label = label or f"relax-{engine}"
-    outdir = Path(outdir)
+    outdir = Path(outdir).absolute()  # the command runs in outdir: a relative -o would nest
     outdir.mkdir(parents=True, exist_ok=True)
     argv = [btr, "relax", os.path.abspath(packing_csv), "--engine", engine, "-o", str(outdir), "--np", str(np)]
     if timestep is not None:
@@ -70,7 +70,7 @@ def _engine_log(outdir: Path, engine: str) -> str:
 def variant(packing_csv: str, outdir, name: str, scene_edit) -> str:
     """A copy of PACKING.csv/.json into outdir/NAME.csv whose JSON scene was changed by
     scene_edit(scene) (in place). Returns the new CSV path. `btr relax` reads its settings from it."""
-    outdir = Path(outdir)
+    outdir = Path(outdir).absolute()  # the command runs in outdir: a relative -o would nest
     outdir.mkdir(parents=True, exist_ok=True)
     src_json = Path(packing_csv).with_suffix(".json")
     meta = read_json(src_json)
@@ -132,7 +132,7 @@ def shake(btr: str, scene_path: str, outdir, cycles: int, count: int | None = No
         raise StepFailed(f"{scene_path}: shake: no largest radius in [grains].radius")
     scene["shaking"] = {"cycles": int(cycles), "lift": 2.0 * r_max * lift_d, "noise": 2.0 * r_max * noise_d,
                         "snapshot_every": int(cycles)}
-    outdir = Path(outdir)
+    outdir = Path(outdir).absolute()  # the command runs in outdir: a relative -o would nest
     outdir.mkdir(parents=True, exist_ok=True)
     toml = outdir / "shake_scene.toml"
     write_scene_toml(toml, scene)

@@ -97,7 +97,7 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
         raise StepFailed(f"error-vs-runtime: --ref-seeds: expected at least 3 (the seed-to-seed spread is the "
                          f"error floor), got {ref_seeds}")
     btr = find_btr()
-    outdir = Path(outdir) if outdir else default_outdir(scene_path) / "error_vs_runtime"
+    outdir = (Path(outdir) if outdir else default_outdir(scene_path) / "error_vs_runtime").absolute()
     rec = RunRecord(outdir, "error-vs-runtime", inputs=scene_inputs(scene_path), btr=btr, progress=progress,
                     settings={"scene": os.path.abspath(scene_path), "engine": engine, "ref_seeds": ref_seeds,
                               "count": count, "relax_times": relax_times, "pour_variants": pour_variants, "np": ranks,
@@ -354,7 +354,7 @@ def run_size_study(scene_path: str, counts, outdir=None, progress=print, **kwarg
     """error-vs-runtime at each grain count into OUTDIR/n<N>/, then size_study.{json,md,png}: each method's
     wall time as a fraction of the reference pour's against N, and the cheapest method at the floor.
     A count whose study fails is a row with its reason; the summary is rewritten after every count."""
-    outdir = Path(outdir) if outdir else default_outdir(scene_path) / "error_vs_runtime_sizes"
+    outdir = (Path(outdir) if outdir else default_outdir(scene_path) / "error_vs_runtime_sizes").absolute()
     outdir.mkdir(parents=True, exist_ok=True)
     sizes = []
     for n in counts:

@@ -38,7 +38,7 @@ def scene_inputs(scene_path: str) -> list:
 def run_pipeline(scene_path: str, outdir=None, engine: str = "liggghts", np: int = 1, seed: int | None = None,
                  count: int | None = None, progress=print) -> dict:
     btr = find_btr()
-    outdir = Path(outdir) if outdir else default_outdir(scene_path)
+    outdir = (Path(outdir) if outdir else default_outdir(scene_path)).absolute()
     rec = RunRecord(outdir, "pipeline", inputs=scene_inputs(scene_path), btr=btr, progress=progress,
                     settings={"scene": os.path.abspath(scene_path), "engine": engine, "np": np, "seed": seed,
                               "count": count})
