@@ -6,7 +6,6 @@
 
 #include "commands.h"
 #include "coupling/relax.h"
-#include "coupling/relax_target.h"
 #include "load_packing.h"
 #include "measures_json.h"
 
@@ -21,8 +20,8 @@ Runner add_relax_command(CLI::App& app) {
     double max_time = 0.0;
     double damping = 0.0;
     double target_phi = 0.0;
-    double target_margin = btr::MetricsOptions{}.margin_diameters;
-    std::vector<double> friction_scales = btr::target_phi_schedule();
+    double compaction_damping = 0.0;
+    std::vector<double> friction_scales;
     std::string stop_rule;
   };
   auto o = std::make_shared<Options>();
@@ -56,16 +55,19 @@ Runner add_relax_command(CLI::App& app) {
                   "kinetic-energy | unbalanced-force | displacement (default: the scene's relax.stop_rule)")
       ->check(CLI::IsMember({"kinetic-energy", "unbalanced-force", "displacement"}));
   cmd->add_option("--target-phi", o->target_phi,
-                  "land on this bulk packing fraction: relax with friction halved stage by stage until it is "
-                  "reached, then restore the friction and settle (default: the scene's relax.target_phi, unset = "
-                  "one relaxation)")
+                  "land on this bulk packing fraction: in the same run, compact with the friction scaled down until "
+                  "the bulk packing fraction reaches it, then restore the friction, stop every grain and settle "
+                  "(default: the scene's relax.target_phi, unset = no compaction)")
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--friction-scales", o->friction_scales,
-                  "--target-phi: the friction scales tried in turn, decreasing in [0, 1) (e.g. 0 goes straight to a "
-                  "frictionless stage)")
-      ->delimiter(',')
-      ->capture_default_str();
-  cmd->add_option("--target-margin", o->target_margin,
+                  "--target-phi: friction scales of the compaction, decreasing in [0, 1), the next tried when the "
+                  "bed comes to rest below the target (default: the scene's relax.friction_scales, 0)")
+      ->delimiter(',');
+  cmd->add_option("--compaction-damping", o->compaction_damping,
+                  "--target-phi: damping during the compaction, as --damping; 0 lets the bed collapse freely (default: "
+                  "the scene's relax.compaction_damping, 0.15)")
+      ->check(CLI::Range(0.0, 0.999999));
+  cmd->add_option("--target-margin", o->settings.target_margin,
                   "bulk window of --target-phi: this many largest diameters from floor, walls and free surface "
                   "(btr measure --margin)")
       ->capture_default_str()
@@ -90,20 +92,10 @@ Runner add_relax_command(CLI::App& app) {
       if (cmd->count("--damping")) o->settings.damping = o->damping;
       if (!o->stop_rule.empty()) p.scene.relax.stop_rule = o->stop_rule;
       const std::string engine = o->engine.empty() ? p.scene.relax.engine : o->engine;
-      if (cmd->count("--target-phi")) p.scene.relax.target_phi = o->target_phi;
-      btr::RelaxResult r;
-      if (p.scene.relax.target_phi) {
-        btr::TargetPhiResult t =
-            btr::relax_to_target_phi(p.packing, p.scene, engine, o->settings, *p.scene.relax.target_phi, o->out,
-                                     o->friction_scales, o->target_margin);
-        std::cout << "target phi " << *p.scene.relax.target_phi << ": "
-                  << (t.reached ? "reached" : "NOT reached (frictionless stage still below)") << " after "
-                  << t.stages.size() - 1 << " reduced-friction stage(s); settled bulk phi "
-                  << t.stages.back().packing_fraction << "; " << t.wall_seconds << " s in all engine runs\n";
-        r = std::move(t.settled);
-      } else {
-        r = btr::relax(p.packing, p.scene, engine, o->settings, o->out);
-      }
+      if (cmd->count("--target-phi")) o->settings.target_phi = o->target_phi;
+      if (cmd->count("--friction-scales")) o->settings.friction_scales = o->friction_scales;
+      if (cmd->count("--compaction-damping")) o->settings.compaction_damping = o->compaction_damping;
+      btr::RelaxResult r = btr::relax(p.packing, p.scene, engine, o->settings, o->out);
       // The relaxed packing's measures, by the same definition as the deposit's, stored in relaxed.json.
       r.relaxed.meta["measures"] = measures_to_json(measure_in_scene(r.relaxed.grains, p.scene));
       btr::write_packing_meta(o->out, "relaxed", r.relaxed.meta);

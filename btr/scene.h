@@ -77,9 +77,13 @@ struct RelaxSpec {
   double damping = 0.0;             // YADE's NewtonIntegrator damping (local, non-viscous), in [0, 1); 0 = off
   double open_margin = 10.0;        // open container: grains farther than this many largest diameters
                                     // beyond the packing's footprint are removed (and counted)
-  // Land on this bulk packing fraction: relax with friction scaled down until it is reached, then restore
-  // the friction and settle (coupling/relax_target.h). Unset: one relaxation at the scene's friction.
+  // Land on this bulk packing fraction (coupling/relax_target.h): in the same run, before the stop rule,
+  // friction is scaled by friction_scales[0] (then the next scale if the bed comes to rest below the target)
+  // with damping compaction_damping, until the bulk packing fraction reaches target_phi; then the friction is
+  // restored, the grains are stopped and the run settles with `damping` on the stop rule. Unset: no compaction.
   std::optional<double> target_phi;
+  std::vector<double> friction_scales{0.0};  // decreasing, in [0, 1)
+  double compaction_damping = 0.15;          // in [0, 1), as `damping`; 0 = undamped collapse
 };
 
 // A single larger grain dropped first, so it sits on the floor under the bed (Brazil nut).

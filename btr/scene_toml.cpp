@@ -217,7 +217,7 @@ class SceneParser {
     if (!s) return;
     rd_.check_keys(*s, {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep", "stop_rule",
                         "stop_unbalanced_force", "stop_displacement", "damping", "open_margin", "preload",
-                        "target_phi"});
+                        "target_phi", "friction_scales", "compaction_damping"});
     RelaxSpec& r = scene_.relax;
     r.engine = rd_.choice(*s, "engine", {"liggghts", "yade"}).value_or(r.engine);
     r.model = rd_.choice(*s, "model", {"hertz", "hooke", "hooke-stiffness"}).value_or(r.model);
@@ -242,6 +242,17 @@ class SceneParser {
     if (auto t = rd_.number(*s, "target_phi", [](double v) { return v > 0.0 && v < 1.0; },
                             "a target bulk packing fraction in (0, 1)"))
       r.target_phi = *t;
+    if (auto v = rd_.numbers(*s, "friction_scales", 0, [](double x) { return x >= 0.0 && x < 1.0; },
+                             "a non-empty array of friction scales in [0, 1), decreasing")) {
+      for (std::size_t k = 1; k < v->size(); ++k)
+        if (!((*v)[k] < (*v)[k - 1]))
+          rd_.fail(s->line, "relax.friction_scales: expected decreasing scales, got " + std::to_string((*v)[k - 1]) +
+                                " then " + std::to_string((*v)[k]));
+      r.friction_scales = *v;
+    }
+    r.compaction_damping = rd_.number_or(*s, "compaction_damping", r.compaction_damping,
+                                         [](double v) { return v >= 0.0 && v < 1.0; },
+                                         "a damping coefficient in [0, 1) during the compaction to target_phi");
   }
 
   // hooke-stiffness takes no default stiffness: every component must have kn and kt from [material]

@@ -10,6 +10,26 @@
 
 namespace btr {
 
+// In-run compaction to a target bulk packing fraction (btr relax --target-phi; relax_target.h), run before
+// the stop rule: friction scaled by friction_scales[k] (k = 0 first; the next one once the bed is at rest,
+// kinetic energy and its mean below rest_kinetic, still below the target), damping `damping`, the packing
+// fraction of the grains centred in the window checked every steps_per_check steps; at the target (or when
+// the last scale is at rest) the scene's friction is restored, every grain is stopped (velocities and spins
+// zeroed), the plan's damping replaces `damping`, and the stop rule runs as without compaction, armed anew.
+struct CompactionPlan {
+  bool enabled = false;
+  double target = 0.0;                  // bulk packing fraction (area fraction in 2D)
+  std::vector<double> friction_scales;  // decreasing, in [0, 1)
+  double damping = 0.0;                 // during the compaction, as RelaxPlan::damping
+  bool slab = false;                    // the window spans the periodic footprint (lo/hi x, y unused)
+  Vec3 window_lo = Vec3::Zero(), window_hi = Vec3::Zero();  // 2D: x and z used
+  double window_measure = 0.0;          // m^3 (3D) or m^2 (2D)
+  double initial_phi = 0.0;             // of the starting packing, by btr measure's exact definition
+  long steps_per_check = 0;
+  long max_checks_per_scale = 0;        // each scale runs at most max_time
+  double rest_kinetic = 0.0;            // J
+};
+
 // The numbers every engine input is built from, computed once by relax.cpp.
 struct RelaxPlan {
   double timestep = 0.0;        // s, already checked against the stable step
@@ -29,6 +49,7 @@ struct RelaxPlan {
   // in 2D). Other containers: has_region is false.
   bool has_region = false;
   double region_lo[2] = {0.0, 0.0}, region_hi[2] = {0.0, 0.0};
+  CompactionPlan compaction;  // enabled only with a target packing fraction
 };
 
 // The threshold of the plan's stop rule: J (kinetic-energy), a ratio (unbalanced-force) or m (displacement).

@@ -106,6 +106,15 @@ LiggghtsLog parse_liggghts_log(const std::string& path) {
         if (w[i] == "unbalanced-force") to_double(w[i + 1], log.final_unbalanced_force);
       continue;
     }
+    if (line.rfind("BTR-COMPACTION-END ", 0) == 0) {  // reached|not-reached friction x S t = T s phi = P
+      log.compaction.ran = true;
+      log.compaction.reached = w.size() > 1 && w[1] == "reached";
+      for (std::size_t i = 0; i + 2 < w.size(); ++i)
+        if (w[i] == "x") to_double(w[i + 1], log.compaction.friction_scale);
+        else if (w[i] == "t" && w[i + 1] == "=") to_double(w[i + 2], log.compaction.time);
+        else if (w[i] == "phi" && w[i + 1] == "=") to_double(w[i + 2], log.compaction.packing_fraction);
+      continue;
+    }
     if (line.rfind("BTR-STOP ", 0) == 0) {
       log.stop_reason = w.size() > 1 ? w[1] : "";
       for (std::size_t i = 0; i + 2 < w.size(); ++i)
@@ -153,6 +162,9 @@ RelaxResult read_liggghts_result(const std::string& dir, const Packing& original
   res.kinetic_history = log.kinetic;
   res.final_unbalanced_force = log.final_unbalanced_force;
   res.stop_value = log.stop_value;
+  res.compaction = log.compaction;
+  if (plan.compaction.enabled && !log.compaction.ran)
+    fail(log_path, "the compaction to the target packing fraction did not end (no BTR-COMPACTION-END line)");
 
   const std::size_t n = original.grains.size();
   const std::string final_path = (fs::path(dir) / kLiggghtsFinalDump).string();

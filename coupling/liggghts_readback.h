@@ -17,6 +17,7 @@ struct LiggghtsLog {
   double stop_value = std::numeric_limits<double>::quiet_NaN();  // "value = V" of the BTR-STOP line
   double final_unbalanced_force = std::numeric_limits<double>::quiet_NaN();  // BTR-FINAL line
   std::string failure;                             // first ERROR / BTR-FAILURE line, or a non-finite value
+  RelaxResult::Compaction compaction;              // the BTR-COMPACTION-END line, if any
 };
 
 // Throws EngineFailure if the log cannot be read.

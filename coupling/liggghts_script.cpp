@@ -13,7 +13,9 @@
 
 #include "coupling/dem_walls.h"
 #include "coupling/materials.h"
+#include "coupling/liggghts_compaction.h"
 #include "coupling/relax_plan.h"
+#include "coupling/relax_target.h"
 #include "coupling/text_file.h"
 #include "coupling/timestep.h"
 
@@ -42,19 +44,19 @@ std::string g6(double v) {
 
 // The simulation box: periodic where the container is, fixed at the walls and, for "open", at the removal
 // region; shrink-wrapped upwards for every container.
-struct Box {
+struct SimulationBox {
   double lo[3], hi[3];
   std::string boundary;
 };
 
-Box make_box(const Grains& grains, int dimension, const Container& c, const RelaxPlan& plan) {
+SimulationBox make_box(const Grains& grains, int dimension, const Container& c, const RelaxPlan& plan) {
   double lo[3], hi[3], r_max = 0.0;
   for (int a = 0; a < 3; ++a) lo[a] = std::numeric_limits<double>::infinity(), hi[a] = -lo[a];
   for (const Grain& g : grains) {
     r_max = std::max(r_max, g.r);
     for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], g.x[a] - g.r), hi[a] = std::max(hi[a], g.x[a] + g.r);
   }
-  Box b;
+  SimulationBox b;
   std::string bx, by;
   auto set = [&](int a, double l, double h) { b.lo[a] = l, b.hi[a] = h; };
   switch (c.kind) {
@@ -183,7 +185,7 @@ std::vector<std::array<int, 3>> cluster_images(const Grains& grains, const Conta
   return image;
 }
 
-std::string data_file(const Packing& packing, const Scene& scene, const Box& box, int n_types) {
+std::string data_file(const Packing& packing, const Scene& scene, const SimulationBox& box, int n_types) {
   const bool clusters = has_clusters(packing.grains);
   std::ostringstream out;
   out << "LIGGGHTS data file written by btr-dem: packing of scene '" << scene.name << "' (atom_style "
@@ -247,6 +249,26 @@ std::vector<double> liggghts_damping_gamma(const Grains& grains, const Scene& sc
   return gamma;
 }
 
+std::string liggghts_friction_fixes(const Scene& scene) {
+  const TypeTable types = make_types(scene);
+  std::string s = "fix btr_friction all property/global coefficientFriction peratomtypepair" +
+                  per_type_pair(types, [](const Material& m) { return m.friction; }) + "\n";
+  if (uses_rolling_friction(scene))
+    s += "fix btr_rolling all property/global coefficientRollingFriction peratomtypepair" +
+         per_type_pair(types, [](const Material& m) { return m.rolling_friction; }) + "\n";
+  return s;
+}
+
+std::string liggghts_viscous_fix(const std::string& id, const Grains& grains, const Scene& scene, double damping) {
+  const std::vector<double> gamma = liggghts_damping_gamma(grains, scene, damping);
+  std::string s = "# Damping " + g6(damping) + " (YADE's NewtonIntegrator damping): F = -gamma v with, per species,\n"
+                  "# gamma = 2 (damping / pi) sqrt(k m) (k: contact stiffness of a mean grain under its weight),\n"
+                  "# the viscous damping that dissipates the same energy per oscillation (coupling/README.md).\n"
+                  "fix " + id + " all viscous " + g17(gamma[0]);
+  for (std::size_t t = 1; t < gamma.size(); ++t) s += " scale " + std::to_string(t + 1) + " " + g17(gamma[t] / gamma[0]);
+  return s + "\n";
+}
+
 std::string liggghts_wall_id(const std::string& wall_name) {
   std::string id = "btr_wall_";
   for (char c : wall_name) {
@@ -275,7 +297,7 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   const int dim = scene.dimension;
   const Grains& grains = packing.grains;
   const std::vector<DemWall> walls = dem_walls(scene.container, dim);
-  const Box box = make_box(grains, dim, scene.container, plan);
+  const SimulationBox box = make_box(grains, dim, scene.container, plan);
   const TypeTable types = make_types(scene);
   const LiggghtsSchedule sched = liggghts_schedule(grains, scene, plan);
   const int n_types = static_cast<int>(types.type_material.size());
@@ -356,11 +378,13 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
     << per_type(types, [](const Material& m) { return m.poisson; }) << "\n";
   s << "fix btr_restitution all property/global coefficientRestitution peratomtypepair"
     << per_type_pair(types, [](const Material& m) { return m.restitution; }) << "\n";
-  s << "fix btr_friction all property/global coefficientFriction peratomtypepair"
-    << per_type_pair(types, [](const Material& m) { return m.friction; }) << "\n";
-  if (rolling)
-    s << "fix btr_rolling all property/global coefficientRollingFriction peratomtypepair"
-      << per_type_pair(types, [](const Material& m) { return m.rolling_friction; }) << "\n";
+  const CompactionPlan& compaction = plan.compaction;
+  if (compaction.enabled)
+    s << "# Friction scaled by " << g6(compaction.friction_scales.front())
+      << " for the compaction to the target packing fraction (restored after it, below).\n"
+      << liggghts_friction_fixes(with_friction_scaled(scene, compaction.friction_scales.front()));
+  else
+    s << liggghts_friction_fixes(scene);
   if (stiffness) {
     // hooke/stiffness (absolute_damping off): F_n = kn delta - m_eff gamman v_n, F_t = -kt xi - m_eff gammat v_t.
     s << "# hooke-stiffness: kn, kt [N/m] and gamman, gammat [1/s, times m_eff]; unlike species: means;\n"
@@ -389,15 +413,10 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
     s << "fix " << liggghts_wall_id(w.name) << " all wall/gran " << models << " primitive type " << types.wall_type
       << " " << wall_geometry(w) << " store_force yes\n";
   s << "fix btr_gravity all gravity " << g17(kGravity) << " vector 0.0 0.0 -1.0\n";
-  if (plan.damping > 0) {
-    const std::vector<double> gamma = liggghts_damping_gamma(grains, scene, plan.damping);
-    s << "# Damping " << g6(plan.damping) << " (YADE's NewtonIntegrator damping): F = -gamma v with, per species,\n"
-      << "# gamma = 2 (damping / pi) sqrt(k m) (k: contact stiffness of a mean grain under its weight),\n"
-      << "# the viscous damping that dissipates the same energy per oscillation (coupling/README.md).\n"
-      << "fix btr_damping all viscous " << g17(gamma[0]);
-    for (std::size_t t = 1; t < gamma.size(); ++t) s << " scale " << t + 1 << " " << g17(gamma[t] / gamma[0]);
-    s << "\n";
-  }
+  if (compaction.enabled && compaction.damping > 0)
+    s << liggghts_viscous_fix(kCompactionDampingFix, grains, scene, compaction.damping);
+  else if (!compaction.enabled && plan.damping > 0)
+    s << liggghts_viscous_fix("btr_damping", grains, scene, plan.damping);
   if (dim == 2) s << "fix btr_plane all setforce NULL 0.0 NULL   # after the walls and gravity\n";
   if (clusters)
     s << "fix btr_integrate btr_free nve/sphere\n"
@@ -469,8 +488,9 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
 
   // The thermo output at the end of each chunk evaluates every compute the checks use (LIGGGHTS refuses a
   // compute between runs that was not invoked on the last step).
+  if (compaction.enabled) s << liggghts_compaction_setup(compaction, dim);
   s << "\nthermo_style    custom step time v_btr_ekin f_btr_kmean v_btr_unbalanced" << (by_displacement ? " v_btr_dmax" : "")
-    << "\n"
+    << (compaction.enabled ? " v_btr_phi" : "") << "\n"
     << "thermo_modify   norm no lost " << (plan.has_region ? "ignore" : "error") << " format float %.17g\n"
     << "thermo          " << sched.steps_per_check << "\n\n";
 
@@ -491,8 +511,9 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
     << "variable btr_bound equal " << g17(sched.blowup_bound) << "\n"
     << "variable btr_tarm equal " << g17(sched.arming_time) << "\n"
     << "variable btr_armed equal 0\n"
-    << "print \"BTR time step " << g17(plan.timestep) << " s: " << plan.timestep_rule << "\"\n\n"
-    << "label btr_loop\n"
+    << "print \"BTR time step " << g17(plan.timestep) << " s: " << plan.timestep_rule << "\"\n\n";
+  if (compaction.enabled) s << liggghts_compaction_loop(compaction, grains, scene, plan.damping, stop_arming_time(grains));
+  s << "label btr_loop\n"
     << "variable btr_check loop " << sched.max_checks << "\n"
     << "run " << sched.steps_per_check << " pre no post no\n"
     << "if \"${btr_ekin} > ${btr_bound}\" then &\n"

@@ -18,6 +18,7 @@
 #include "coupling/preload.h"
 #include "coupling/process.h"
 #include "coupling/relax_plan.h"
+#include "coupling/relax_target.h"
 #include "coupling/text_file.h"
 #include "coupling/timestep.h"
 
@@ -210,6 +211,7 @@ RelaxPlan make_plan(const Packing& packing, const Scene& scene, const RelaxSetti
   const double damping = settings.damping ? *settings.damping : scene.relax.damping;
   if (!(damping >= 0.0 && damping < 1.0)) throw RelaxRefused("damping must be in [0, 1), got " + g6(damping));
   plan.damping = damping;
+  plan.compaction = plan_compaction(packing, scene, settings, plan.timestep, plan.kinetic_threshold);
   if (scene.container.kind == ContainerKind::Open) {
     // The region: the packing's footprint (grain extents) grown by open_margin largest diameters.
     plan.has_region = true;
@@ -239,6 +241,14 @@ std::vector<std::string> write_engine_inputs(const Packing& packing, const Scene
             << (plan.stop_rule == "kinetic-energy" ? " J" : plan.stop_rule == "displacement" ? " m per check window" : "")
             << "), or max_time " << g6(plan.max_time) << " s"
             << (plan.damping > 0 ? "; damping " + g6(plan.damping) : std::string()) << "\n";
+  if (plan.compaction.enabled) {
+    std::cout << "compaction to bulk phi " << g6(plan.compaction.target) << " (from " << g6(plan.compaction.initial_phi)
+              << "): friction x";
+    for (double f : plan.compaction.friction_scales) std::cout << " " << g6(f);
+    std::cout << ", damping " << g6(plan.compaction.damping) << ", centres counted in z in ["
+              << g6(plan.compaction.window_lo.z()) << ", " << g6(plan.compaction.window_hi.z()) << "] m, every "
+              << plan.compaction.steps_per_check << " steps\n";
+  }
   if (plan.has_region)
     std::cout << "open floor: grains leaving x in [" << g6(plan.region_lo[0]) << ", " << g6(plan.region_hi[0]) << "]"
               << (scene.dimension == 3 ? ", y in [" + g6(plan.region_lo[1]) + ", " + g6(plan.region_hi[1]) + "]" : "")
@@ -402,6 +412,23 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
                                 "relax.open_margin largest diameters) were removed; ids are the input packing's"}};
   }
   meta["relax"] = info;
+  if (plan.compaction.target > 0.0) {
+    meta["target_phi"] = target_phi_record(plan.compaction, res, scene, settings.target_margin);
+    const nlohmann::json& t = meta["target_phi"];
+    std::cout << "target phi " << g6(plan.compaction.target) << ": "
+              << (!plan.compaction.enabled ? "the packing already had it (bulk phi " + g6(plan.compaction.initial_phi) + ")"
+                  : res.compaction.reached
+                      ? "reached at t = " + g6(res.compaction.time) + " s with friction x " +
+                            g6(res.compaction.friction_scale) + " (in-run phi " + g6(res.compaction.packing_fraction) + ")"
+                      : "NOT reached: the bed came to rest at in-run phi " + g6(res.compaction.packing_fraction) +
+                            " with friction x " + g6(res.compaction.friction_scale))
+              << "; settled bulk phi "
+              << (t["settled_bulk_packing_fraction"].is_number() ? g6(t["settled_bulk_packing_fraction"].get<double>())
+                                                                 : std::string("(no bulk window)"))
+              << "\n";
+  } else {
+    meta.erase("target_phi");  // the input's record (a packing relaxed before) describes another run
+  }
   // The input's structural measures describe the input, not this packing; `btr relax` measures the
   // relaxed grains itself and stores them under the same key.
   meta.erase("measures");

@@ -23,6 +23,10 @@ struct RelaxSettings {
                                     // (with a pre-load: the overlap beyond the intended one)
   bool preload = false;             // pre-loaded start (preload.h); also on when the scene sets relax.preload
   std::optional<double> damping;    // overrides the scene's relax.damping
+  std::optional<double> target_phi; // overrides the scene's relax.target_phi (relax_target.h)
+  std::optional<std::vector<double>> friction_scales;  // overrides relax.friction_scales
+  std::optional<double> compaction_damping;            // overrides relax.compaction_damping
+  double target_margin = 3.0;       // bulk window of the target: largest diameters from floor, walls, surface
 };
 
 // What an engine run produced.
@@ -43,6 +47,14 @@ struct RelaxResult {
   double final_unbalanced_force = std::numeric_limits<double>::quiet_NaN();
   // The stop rule's measure at the check that fired it (J, ratio or m; NaN for max-time).
   double stop_value = std::numeric_limits<double>::quiet_NaN();
+  // The compaction to a target packing fraction, when the plan had one (engine_adapter.h, CompactionPlan).
+  struct Compaction {
+    bool ran = false;
+    bool reached = false;          // the in-run packing fraction reached the target
+    double friction_scale = 0.0;   // the scale in force when it ended
+    double time = 0.0;             // s, when the friction was restored
+    double packing_fraction = 0.0; // in-run estimate then (centres in the window)
+  } compaction;
 };
 
 // An engine that failed (non-zero exit, lost atoms, NaN, blow-up, grains outside the container):

@@ -1,18 +1,29 @@
 #include "coupling/relax_target.h"
 
+#include <algorithm>
 #include <cmath>
-#include <iostream>
+#include <cstdio>
 #include <limits>
+#include <string>
 
-#include "btr/metrics.h"
 #include "coupling/relax_plan.h"
 
 namespace btr {
 
 namespace {
-// Reduced-friction stages end once the rearrangement has stopped; the kinetic threshold there is this
-// many times the scene's (the settle at full friction uses the scene's own).
-constexpr double kStageKineticLoosening = 100.0;
+// The packing fraction is checked this often during the compaction: a free collapse gains ~0.002 per 100
+// steps near the target (bed3d), so a check every 50 steps overshoots by at most about the pours' own
+// seed-to-seed spread.
+constexpr long kCompactionCheckSteps = 50;
+// A friction scale has brought the bed to rest when its kinetic energy and its mean are below this many times
+// the stop threshold: the compaction only needs the rearrangement to end, not the settle's rest.
+constexpr double kRestLoosening = 100.0;
+
+std::string num(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
 }  // namespace
 
 Scene with_friction_scaled(const Scene& scene, double scale) {
@@ -31,67 +42,84 @@ double bulk_packing_fraction(const Grains& grains, const Scene& scene, double ma
   return b.valid ? b.packing_fraction : std::numeric_limits<double>::quiet_NaN();
 }
 
-std::vector<double> target_phi_schedule() { return {0.5, 0.25, 0.125, 0.0625, 0.03125, 0.0}; }
-
-TargetPhiResult relax_to_target_phi(const Packing& packing, const Scene& scene, const std::string& engine,
-                                    const RelaxSettings& settings, double target_phi, const std::string& out_dir,
-                                    const std::vector<double>& schedule, double margin) {
-  if (!(target_phi > 0.0 && target_phi < 1.0))
-    throw RelaxRefused("target packing fraction must be in (0, 1), got " + std::to_string(target_phi));
-  for (std::size_t k = 0; k < schedule.size(); ++k)
-    if (!(schedule[k] >= 0.0 && schedule[k] < 1.0 && (k == 0 || schedule[k] < schedule[k - 1])))
+CompactionPlan plan_compaction(const Packing& packing, const Scene& scene, const RelaxSettings& settings,
+                               double timestep, double kinetic_threshold) {
+  CompactionPlan c;
+  const std::optional<double> target = settings.target_phi ? settings.target_phi : scene.relax.target_phi;
+  if (!target) return c;
+  c.target = *target;
+  if (!(c.target > 0.0 && c.target < 1.0))
+    throw RelaxRefused("target packing fraction must be in (0, 1), got " + num(c.target));
+  c.friction_scales = settings.friction_scales ? *settings.friction_scales : scene.relax.friction_scales;
+  if (c.friction_scales.empty()) throw RelaxRefused("target packing fraction: no friction scale to try");
+  for (std::size_t k = 0; k < c.friction_scales.size(); ++k)
+    if (!(c.friction_scales[k] >= 0.0 && c.friction_scales[k] < 1.0 &&
+          (k == 0 || c.friction_scales[k] < c.friction_scales[k - 1])))
       throw RelaxRefused("target packing fraction: friction scales must decrease within [0, 1)");
-  if (schedule.empty()) throw RelaxRefused("target packing fraction: no friction scale to try");
-  TargetPhiResult out;
-  Packing current = packing;
-  const auto record = [&](double scale, const RelaxResult& r) {
-    TargetPhiStage st;
-    st.friction_scale = scale;
-    st.packing_fraction = bulk_packing_fraction(r.relaxed.grains, scene, margin);
-    st.wall_seconds = r.wall_seconds;
-    st.simulated_time = r.simulated_time;
-    st.stop_reason = r.stop_reason;
-    out.wall_seconds += r.wall_seconds;
-    out.stages.push_back(st);
-    std::cout << "target phi " << target_phi << ": friction x " << scale << " -> bulk phi " << st.packing_fraction
-              << " (" << r.stop_reason << ", " << r.wall_seconds << " s)\n";
+  c.damping = settings.compaction_damping ? *settings.compaction_damping : scene.relax.compaction_damping;
+  if (!(c.damping >= 0.0 && c.damping < 1.0))
+    throw RelaxRefused("target packing fraction: compaction damping must be in [0, 1), got " + num(c.damping));
+  for (const Grain& g : packing.grains)
+    if (g.cluster != 0)
+      throw RelaxRefused("target packing fraction: the packing has rigid clusters (grain " +
+                         std::to_string(&g - packing.grains.data() + 1) +
+                         "); the compaction's friction switch and stop of every grain are not written for rigid "
+                         "bodies: relax without --target-phi");
+
+  MetricsOptions o;
+  o.margin_diameters = settings.target_margin;
+  const BulkMeasures b = bulk_measures(packing.grains, scene.dimension, scene.container, o);
+  if (!b.valid)
+    throw RelaxRefused("target packing fraction: the packing has no bulk window to measure (" + b.note +
+                       "); use a smaller --target-margin or a deeper packing");
+  c.initial_phi = b.packing_fraction;
+  if (c.initial_phi >= c.target) return c;  // already there: no compaction
+
+  double d_max = 0.0;
+  for (const Grain& g : packing.grains) d_max = std::max(d_max, 2.0 * g.r);
+  const double m = settings.target_margin * d_max;
+  c.slab = b.slab;
+  c.window_lo = b.window.lo;
+  c.window_hi = b.window.hi;
+  c.window_hi.z() = (b.window.hi.z() + m) * c.initial_phi / c.target - m;
+  if (!(c.window_hi.z() > c.window_lo.z()))
+    throw RelaxRefused("target packing fraction: the bed is too shallow to keep a bulk window through a compaction "
+                       "from " + num(c.initial_phi) + " to " + num(c.target) + "; use a smaller --target-margin");
+  const double height = c.window_hi.z() - c.window_lo.z();
+  const double dx = c.window_hi.x() - c.window_lo.x(), dy = c.window_hi.y() - c.window_lo.y();
+  c.window_measure = scene.dimension == 3 ? dx * dy * height : dx * height;
+  c.steps_per_check = kCompactionCheckSteps;
+  c.max_checks_per_scale =
+      std::max(1L, static_cast<long>(std::ceil(scene.relax.max_time / timestep / kCompactionCheckSteps)));
+  c.rest_kinetic = kRestLoosening * kinetic_threshold;
+  c.enabled = true;
+  return c;
+}
+
+nlohmann::json target_phi_record(const CompactionPlan& plan, const RelaxResult& result, const Scene& scene,
+                                 double margin) {
+  const double settled = bulk_packing_fraction(result.relaxed.grains, scene, margin);
+  nlohmann::json rec = {
+      {"target", plan.target},
+      {"window_margin_diameters", margin},
+      {"initial_bulk_packing_fraction", plan.initial_phi},
+      {"settled_bulk_packing_fraction", std::isfinite(settled) ? nlohmann::json(settled) : nlohmann::json(nullptr)},
+      {"compaction_ran", plan.enabled},
+      {"reached", plan.enabled ? result.compaction.reached : true},
   };
-  const double phi0 = bulk_packing_fraction(packing.grains, scene, margin);
-  // A pre-loaded start (preload.h) needs BTR's supports: only the first run starts from the BTR packing.
-  RelaxSettings later = settings;
-  Scene settle_scene = scene;
-  if (std::isnan(phi0)) throw RelaxRefused("target packing fraction: the packing has no bulk window to measure");
-  if (!(phi0 >= target_phi)) {
-    for (std::size_t k = 0; k < schedule.size() && !out.reached; ++k) {
-      Scene stage = with_friction_scaled(settle_scene, schedule[k]);
-      stage.relax.stop_kinetic_ratio *= kStageKineticLoosening;
-      RelaxResult r = relax(current, stage, engine, later, out_dir + "/friction_" + std::to_string(k + 1));
-      later.preload = false, settle_scene.relax.preload = false;
-      record(schedule[k], r);
-      current.grains = r.relaxed.grains;
-      if (!r.removed.empty())
-        throw EngineFailure("target packing fraction: grains left an open container in a reduced-friction stage; "
-                            "use a walled or periodic container");
-      out.reached = out.stages.back().packing_fraction >= target_phi;
-    }
-  } else {
-    out.reached = true;  // already at or above the target: only the settle
-  }
-  out.settled = relax(current, settle_scene, engine, later, out_dir);
-  record(1.0, out.settled);
-  nlohmann::json stages = nlohmann::json::array();
-  for (const TargetPhiStage& s : out.stages)
-    stages.push_back({{"friction_scale", s.friction_scale}, {"bulk_packing_fraction", s.packing_fraction},
-                      {"wall_seconds", s.wall_seconds}, {"simulated_time", s.simulated_time},
-                      {"stop_reason", s.stop_reason}});
-  out.settled.relaxed.meta["target_phi"] = {
-      {"target", target_phi}, {"window_margin_diameters", margin}, {"initial_bulk_packing_fraction", phi0}, {"reached", out.reached},
-      {"stages", stages}, {"wall_seconds_all_runs", out.wall_seconds},
-      {"recipe", "friction scaled stage by stage (stages[].friction_scale), stopping at the first whose bulk phi >= target ("
-                 "kinetic threshold x" + std::to_string(static_cast<int>(kStageKineticLoosening)) +
-                     "), then full friction settled by the scene's stop rule"}};
-  write_packing_meta(out_dir, "relaxed", out.settled.relaxed.meta);
-  return out;
+  if (plan.enabled)
+    rec.update({{"friction_scales", plan.friction_scales},
+                {"compaction_damping", plan.damping},
+                {"friction_scale_at_end", result.compaction.friction_scale},
+                {"friction_restored_at", result.compaction.time},
+                {"in_run_packing_fraction_at_end", result.compaction.packing_fraction},
+                {"recipe", "in one engine run: friction scaled (friction_scales, the next when the bed came to rest "
+                           "below the target) with compaction_damping until the packing fraction of the grains "
+                           "centred in the bulk window reached the target; then the scene's friction restored, every "
+                           "grain stopped, and the scene's stop rule run with relax.damping"}});
+  else
+    rec["recipe"] = "the packing already had the target: relaxed without compaction";
+  return rec;
 }
 
 }  // namespace btr

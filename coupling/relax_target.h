@@ -1,49 +1,43 @@
 #pragma once
 // Relaxation that lands on a target bulk packing fraction: the friction-reduction recipe YADE users know
-// from REFD-style compaction. Relax with every friction coefficient scaled down (halved stage by stage)
-// until the bulk packing fraction reaches the target, then restore the friction and settle.
-// Each stage is a full engine run from the previous stage's relaxed packing, so both engines are
-// served by the same writers; the friction of a stage is simply the scene's materials scaled.
+// (REFD-style compaction: friction lowered while the packing fraction is watched, restored once it reaches
+// the target), run inside the one engine run of the relaxation. The engine watches the packing fraction of
+// the grains centred in the bulk window every few steps; the writers (liggghts_script.cpp, yade_script.cpp)
+// emit the compaction phase from the CompactionPlan made here (engine_adapter.h says what it does).
+//
+// Why in the run and not as separate runs to rest at each friction: the compaction of a BTR bed is a
+// collapse under gravity that overshoots any target if it runs to rest without friction (bed3d, 10 000
+// grains: 0.645 against the pour's 0.626), and each run to rest costs a relaxation. Watched in the run,
+// the collapse is stopped at the target, and how fast it was allowed to go (compaction_damping) decides how
+// many contacts the settled bed keeps (README, "Target packing fraction").
 #include <string>
 #include <vector>
 
 #include "btr/metrics.h"
-#include "coupling/relax.h"
+#include "coupling/engine_adapter.h"
 
 namespace btr {
-
-struct TargetPhiStage {
-  double friction_scale = 1.0;  // friction of this stage / the scene's
-  double packing_fraction = 0.0;  // bulk packing fraction after the stage (btr measure's window)
-  double wall_seconds = 0.0, simulated_time = 0.0;
-  std::string stop_reason;
-};
-
-struct TargetPhiResult {
-  RelaxResult settled;                // the last run: full friction, the scene's stop rule
-  std::vector<TargetPhiStage> stages;  // reduced-friction stages, then the settle (scale 1)
-  bool reached = false;               // a reduced-friction stage reached the target
-  double wall_seconds = 0.0;          // all engine runs
-};
 
 // The scene with every material's friction (and rolling friction) multiplied by scale.
 Scene with_friction_scaled(const Scene& scene, double scale);
 
 // Bulk packing fraction by `btr measure`'s definition (its window, `margin` largest diameters from floor, walls
-// and surface, default btr measure's); NaN if the bulk window is empty.
+// and surface); NaN if the bulk window is empty.
 double bulk_packing_fraction(const Grains& grains, const Scene& scene, double margin = MetricsOptions{}.margin_diameters);
 
-// Friction scales tried in order: 1/2, 1/4, ... down to 1/32, then 0 (frictionless).
-std::vector<double> target_phi_schedule();
+// The compaction phase of a relaxation of `packing`, from settings (which override the scene's relax.target_phi,
+// friction_scales and compaction_damping). Not enabled without a target, or when the packing's bulk packing
+// fraction already reaches it (then only `target` and `initial_phi` are set). The window is btr measure's bulk
+// window of the starting packing with its top lowered by the compaction the target needs (a bed compacting
+// uniformly from the floor: (top + m) phi0 / target - m, m the margin), so it stays inside the bed.
+// Throws RelaxRefused for a target outside (0, 1), scales that are empty or not decreasing in [0, 1), a
+// compaction damping outside [0, 1), an empty bulk window, or rigid clusters.
+CompactionPlan plan_compaction(const Packing& packing, const Scene& scene, const RelaxSettings& settings,
+                               double timestep, double kinetic_threshold);
 
-// Reduced-friction stages go into out_dir/friction_<k>/, the settle into out_dir itself (relaxed.csv ...).
-// Reduced-friction stages stop on the scene's rule with the kinetic ratio loosened (they only need the
-// rearrangement to end); the settle uses the scene's rule as given. relaxed.json records the stages.
-// `schedule`: the friction scales to try, in order. Throws RelaxRefused for a target outside (0, 1), a
-// packing without a bulk window, or a schedule that is empty or not decreasing within [0, 1).
-TargetPhiResult relax_to_target_phi(const Packing& packing, const Scene& scene, const std::string& engine,
-                                    const RelaxSettings& settings, double target_phi, const std::string& out_dir,
-                                    const std::vector<double>& schedule = target_phi_schedule(),
-                                    double margin = MetricsOptions{}.margin_diameters);
+// relaxed.json's "target_phi" record: the target, the starting and settled bulk packing fractions (btr measure's
+// definition), whether and how the compaction reached the target, and the recipe.
+nlohmann::json target_phi_record(const CompactionPlan& plan, const RelaxResult& result, const Scene& scene,
+                                 double margin);
 
 }  // namespace btr

@@ -234,7 +234,9 @@ json scene_core_to_json(const Scene& s) {
         {"damping", s.relax.damping},
         {"open_margin", s.relax.open_margin},
         {"preload", s.relax.preload},
-        {"target_phi", s.relax.target_phi ? json(*s.relax.target_phi) : json(nullptr)}}},
+        {"target_phi", s.relax.target_phi ? json(*s.relax.target_phi) : json(nullptr)},
+        {"friction_scales", s.relax.friction_scales},
+        {"compaction_damping", s.relax.compaction_damping}}},
   };
 }
 
@@ -314,7 +316,7 @@ Scene scene_from_json(const json& j, const std::string& origin) {
   const json& r = rd.object(j, "", "relax",
                             {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep",
                              "stop_rule", "stop_unbalanced_force", "stop_displacement", "damping", "open_margin", "preload",
-                             "target_phi"});
+                             "target_phi", "friction_scales", "compaction_damping"});
   s.relax.engine = rd.string(r, "relax", "engine");
   s.relax.model = rd.string(r, "relax", "model");
   s.relax.max_time = rd.number(r, "relax", "max_time");
@@ -335,6 +337,16 @@ Scene scene_from_json(const json& j, const std::string& origin) {
   if (r.contains("damping")) s.relax.damping = rd.number(r, "relax", "damping");
   if (r.contains("open_margin")) s.relax.open_margin = rd.number(r, "relax", "open_margin");
   if (r.contains("target_phi") && !r["target_phi"].is_null()) s.relax.target_phi = rd.number(r, "relax", "target_phi");
+  if (r.contains("friction_scales")) {
+    const json& f = r["friction_scales"];
+    if (!f.is_array() || f.empty()) rd.fail("relax.friction_scales", "expected a non-empty array, got " + f.dump());
+    s.relax.friction_scales.clear();
+    for (const json& v : f) {
+      if (!v.is_number()) rd.fail("relax.friction_scales", "expected numbers, got " + v.dump());
+      s.relax.friction_scales.push_back(v.get<double>());
+    }
+  }
+  if (r.contains("compaction_damping")) s.relax.compaction_damping = rd.number(r, "relax", "compaction_damping");
   if (j.contains("intruder")) {
     const json& in = rd.object(j, "", "intruder", {"diameter_ratio", "x", "y", "species"});
     IntruderSpec spec;

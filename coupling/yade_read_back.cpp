@@ -126,6 +126,16 @@ RelaxResult yade_read_back(const std::string& dir, const Packing& original, cons
     result.stop_value = st["stop_value"].get<double>();
   if (st.contains("final_unbalanced_force") && st["final_unbalanced_force"].is_number())
     result.final_unbalanced_force = st["final_unbalanced_force"].get<double>();
+  if (st.contains("compaction") && st["compaction"].is_object()) {
+    const nlohmann::json& c = st["compaction"];
+    result.compaction.ran = true;
+    result.compaction.reached = c.value("reached", false);
+    result.compaction.friction_scale = c.value("friction_scale", 0.0);
+    result.compaction.time = c.value("time", 0.0);
+    result.compaction.packing_fraction = c.value("packing_fraction", 0.0);
+  }
+  if (plan.compaction.enabled && !result.compaction.ran)
+    in.fail("the compaction to the target packing fraction did not end (no compaction record)");
 
   // Final state: one row per grain still in the run, in id order.
   const auto rows = in.csv(yade_files::kFinal, "id,x,y,z,vx,vy,vz");

@@ -26,6 +26,7 @@
 #include "coupling/dem_walls.h"
 #include "coupling/liggghts_script.h"
 #include "coupling/materials.h"
+#include "coupling/relax_plan.h"
 #include "coupling/timestep.h"
 
 namespace btr {
@@ -160,6 +161,23 @@ double verlet_distance(const Scene& scene, const PackingStats& st, double period
   return std::min(d, 0.9 * room);
 }
 
+// COMPACTION: None, or the plan's compaction to a target packing fraction (CompactionPlan), checked at every
+// sample of the stop rule (every AVERAGE_EVERY steps).
+std::string compaction_constant(const RelaxPlan& plan, const Grains& grains, const LiggghtsSchedule& sched) {
+  const CompactionPlan& c = plan.compaction;
+  if (!c.enabled) return "COMPACTION = None  # no target packing fraction\n";
+  std::string scales;
+  for (double f : c.friction_scales) scales += (scales.empty() ? "" : ", ") + num(f);
+  const long samples = std::max(1L, static_cast<long>(std::ceil(plan.max_time / plan.timestep / sched.average_every)));
+  auto vec = [](const Vec3& v) { return "(" + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) + ")"; };
+  return "COMPACTION = dict(  # btr relax --target-phi: compaction before the stop rule (class Compaction)\n"
+         "    target=" + num(c.target) + ", friction_scales=[" + scales + "], damping=" + num(c.damping) + ",\n"
+         "    slab=" + std::string(c.slab ? "True" : "False") + ", window_lo=" + vec(c.window_lo) + ", window_hi=" +
+         vec(c.window_hi) + ", window_measure=" + num(c.window_measure) + ",\n"
+         "    rest_kinetic=" + num(c.rest_kinetic) + ", max_samples_per_scale=" + std::to_string(samples) +
+         ", arming=" + num(stop_arming_time(grains)) + ")\n";
+}
+
 const char* kHeader = R"(#
 # Run it in one of two ways (every file is read from and written to this script's folder):
 #   PYTHONPATH=/usr/lib/x86_64-linux-gnu/yade-double/py OMP_NUM_THREADS=1 /usr/bin/python3 relax_yade.py
@@ -270,6 +288,7 @@ std::string yade_script(const Packing& packing, const Scene& scene, const RelaxP
                                 ", " + num(plan.region_hi[1]) + ")  # open floor: x0, x1, y0, y1 [m]; grains leaving it are removed"
                           : std::string("None  # no removal region (not an open floor)"))
       << "\n"
+      << compaction_constant(plan, packing.grains, sched)
       << "VERLET_DIST = " << num(verlet) << "  # m, collider's bounding-box margin: "
       << (verlet < 0.5 * st.r_min ? "below half the period with the largest grain" : "0.5 r_min") << "\n\n\n"
       << "def scene():\n";

@@ -57,7 +57,7 @@ for _name in (STATUS_FILE, FINAL_FILE, KINETIC_FILE, CONTACTS_FILE):
 
 try:
     import yade
-    from yade import O, utils
+    from yade import O, Vector3, utils
     from yade.wrapper import (Bo1_Box_Aabb, Bo1_Facet_Aabb, Bo1_Sphere_Aabb, Bo1_Wall_Aabb, ForceResetter,
                               FrictMat, Ig2_Box_Sphere_ScGeom, Ig2_Facet_Sphere_ScGeom, Ig2_Sphere_Sphere_ScGeom,
                               Ig2_Wall_Sphere_ScGeom, InsertionSortCollider, InteractionLoop,
@@ -211,9 +211,18 @@ def add_cylinder(radius, height, segments):
     _walls.extend(O.bodies.append(facets))
 
 
+def friction_angles(scale):
+    """The Ip2 functors' friction angles of every material pair, friction scaled by `scale`."""
+    return MatchMaker(matches=[(a, b, math.atan(mu * scale)) for a, b, _, mu in _pairs])
+
+
+_ip2 = None  # the Ip2 functor (its frictAngle is replaced when the compaction restores the friction)
+
+
 def build_engines():
+    global _ip2
     en = MatchMaker(matches=[(a, b, e) for a, b, e, _ in _pairs])
-    friction_angle = MatchMaker(matches=[(a, b, math.atan(mu)) for a, b, _, mu in _pairs])
+    friction_angle = friction_angles(COMPACTION["friction_scales"][0] if COMPACTION else 1.0)
     if MODEL == "hertz":
         ip2 = Ip2_FrictMat_FrictMat_MindlinPhys(en=en, frictAngle=friction_angle)
         law = Law2_ScGeom_MindlinPhys_Mindlin()
@@ -225,6 +234,9 @@ def build_engines():
     else:
         ip2 = Ip2_ViscElMat_ViscElMat_ViscElPhys(en=en, frictAngle=friction_angle)
         law = Law2_ScGeom_ViscElPhys_Basic()
+    if _rolling is not None and COMPACTION:
+        raise RunFailure("the compaction to a target packing fraction does not scale YADE's rolling friction")
+    _ip2 = ip2
     collider = InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Wall_Aabb(), Bo1_Facet_Aabb(), Bo1_Box_Aabb()],
                                      verletDist=VERLET_DIST, label="collider")
     if _cell is not None:
@@ -239,7 +251,8 @@ def build_engines():
         # DAMPING is YADE's local non-viscous damping, off (0) unless the scene or `btr relax --damping` asks
         # for it: then, besides the contact dashpots and friction, each force component is reduced by
         # DAMPING |F| against the velocity. kinSplit + O.trackEnergy give the translational kinetic energy.
-        NewtonIntegrator(gravity=(0.0, 0.0, -GRAVITY), damping=DAMPING, kinSplit=True, label="newton"),
+        NewtonIntegrator(gravity=(0.0, 0.0, -GRAVITY), damping=COMPACTION["damping"] if COMPACTION else DAMPING,
+                         kinSplit=True, label="newton"),
     ]
     O.trackEnergy = True
 
@@ -302,6 +315,7 @@ def write_status(status, reason, message, wall):
         "stop_value": _rule.value if _rule is not None else None,
         "final_unbalanced_force": _final_unbalanced,
         "removed": _removed,
+        "compaction": _rule.compaction.outcome if _rule is not None else None,
     }, indent=1) + "\n")
 
 
@@ -336,6 +350,91 @@ def grain_positions():
     return [O.bodies[bid].state.pos if O.bodies[bid] is not None else None for _, bid in _grains]
 
 
+def bulk_packing_fraction():
+    """Solid fraction (area fraction in 2D) of the grains centred in COMPACTION's window."""
+    c = COMPACTION
+    lo, hi = c["window_lo"], c["window_hi"]
+    solid = 0.0
+    for _, bid in _grains:
+        b = O.bodies[bid]
+        if b is None:
+            continue
+        p = b.state.pos
+        if not (lo[2] <= p[2] <= hi[2]):
+            continue
+        if not c["slab"] and not (lo[0] <= p[0] <= hi[0] and (DIMENSION == 2 or lo[1] <= p[1] <= hi[1])):
+            continue
+        r = b.shape.radius
+        solid += 4.0 / 3.0 * math.pi * r ** 3 if DIMENSION == 3 else math.pi * r * r
+    return solid / c["window_measure"]
+
+
+class Compaction:
+    """The compaction to COMPACTION["target"] (btr relax --target-phi; the LIGGGHTS script's, step for step):
+    friction scaled by friction_scales[k], NewtonIntegrator damping COMPACTION["damping"], the bulk packing
+    fraction checked at every sample; at the target, or when the last scale has brought the bed to rest (kinetic
+    energy and its mean over STEPS_PER_CHECK steps below COMPACTION["rest_kinetic"], after the arming time of the
+    scale) or used max_time, the friction of every pair and contact is restored, every grain stopped, DAMPING
+    set, and the stop rule armed anew."""
+
+    def __init__(self, rule):
+        self.rule = rule
+        self.active = bool(COMPACTION)
+        self.k = 0
+        self.samples = 0
+        self.recent = []
+        self.rest_from = COMPACTION["arming"] if COMPACTION else 0.0
+        self.outcome = None
+
+    def step(self, t, e):
+        """Called at every sample while active; returns True while the compaction goes on."""
+        c = COMPACTION
+        phi = bulk_packing_fraction()
+        self.samples += 1
+        self.recent = (self.recent + [e])[-(STEPS_PER_CHECK // AVERAGE_EVERY):]
+        if phi >= c["target"]:
+            self.finish(True, t, phi)
+            return False
+        at_rest = t >= self.rest_from and e < c["rest_kinetic"] and \
+            sum(self.recent) / len(self.recent) < c["rest_kinetic"]
+        if at_rest or self.samples >= c["max_samples_per_scale"]:
+            log("compaction: friction x %g at rest below the target at t = %.6g s, phi %.6g" % (
+                c["friction_scales"][self.k], t, phi))
+            if self.k + 1 == len(c["friction_scales"]):
+                self.finish(False, t, phi)
+                return False
+            self.k += 1
+            self.samples = 0
+            self.recent = []
+            self.rest_from = t + c["arming"]
+            self.set_friction(c["friction_scales"][self.k])
+        return True
+
+    def set_friction(self, scale):
+        _ip2.frictAngle = friction_angles(scale)
+        tangent = {}
+        for a, b, _, mu in _pairs:
+            tangent[(a, b)] = tangent[(b, a)] = mu * scale
+        for i in O.interactions:
+            if i.isReal:
+                i.phys.tangensOfFrictionAngle = tangent[(O.bodies[i.id1].material.id, O.bodies[i.id2].material.id)]
+
+    def finish(self, reached, t, phi):
+        c = COMPACTION
+        scale = c["friction_scales"][self.k]
+        log("compaction %s: friction x %g, t = %.6g s, phi %.6g; friction restored, grains stopped, damping %g" % (
+            "reached the target" if reached else "did NOT reach the target", scale, t, phi, DAMPING))
+        self.set_friction(1.0)
+        for b in O.bodies:
+            if b is not None and b.dynamic:
+                b.state.vel = Vector3(0.0, 0.0, 0.0)
+                b.state.angVel = Vector3(0.0, 0.0, 0.0)
+        next(e for e in O.engines if isinstance(e, NewtonIntegrator)).damping = DAMPING
+        self.outcome = {"reached": reached, "friction_scale": scale, "time": t, "packing_fraction": phi}
+        self.active = False
+        self.rule.rearm(t)
+
+
 class StopRule:
     """The stop rules of the LIGGGHTS script, step for step, run inside YADE's loop by a PyRunner every
     AVERAGE_EVERY steps (so YADE runs whole chunks of steps without returning to Python): the translational
@@ -363,6 +462,15 @@ class StopRule:
         self.failure = None
         self.next_report = time.time() + 10.0
         self.reference = grain_positions() if STOP_RULE == "displacement" else None
+        self.arming_time = ARMING_TIME
+        self.compaction = Compaction(self)
+
+    def rearm(self, t):
+        """After the compaction: the stop rule starts again, armed after COMPACTION["arming"]."""
+        self.total, self.count, self.checks, self.armed = 0.0, 0, 0, False
+        self.arming_time = t + COMPACTION["arming"]
+        if STOP_RULE == "displacement":
+            self.reference = grain_positions()
 
     def sample(self):
         try:
@@ -392,6 +500,11 @@ class StopRule:
                 raise RunFailure("kinetic energy is %r at t = %.6g s (step %d)" % (e, t, step))
             raise RunFailure("blow-up: kinetic energy %.6g J above the bound %.6g J (twice the energy the packing "
                              "holds) at t = %.6g s (step %d)" % (e, KINETIC_BOUND, t, step))
+        if self.compaction.active:
+            if (self.compaction.samples + 1) % (STEPS_PER_CHECK // AVERAGE_EVERY) == 0:
+                _history.append((t, e))
+            self.compaction.step(t, e)
+            return
         self.total += e
         self.count += 1
         if self.count < self.samples:
@@ -412,7 +525,7 @@ class StopRule:
             raise RunFailure("bodies were lost: %d left of %d (%d removed)" % (present, self.bodies, len(_removed)))
         if mean >= KINETIC_THRESHOLD:
             self.armed = True
-        ready = self.armed or t >= ARMING_TIME if STOP_RULE == "kinetic-energy" else t >= ARMING_TIME
+        ready = self.armed or t >= self.arming_time if STOP_RULE == "kinetic-energy" else t >= self.arming_time
         if STOP_RULE == "kinetic-energy":
             self.value = e
             met = mean < KINETIC_THRESHOLD and e < KINETIC_THRESHOLD
@@ -464,7 +577,10 @@ def relax():
     O.engines = O.engines + [PyRunner(command="_btr_stop_rule.sample()", iterPeriod=AVERAGE_EVERY,
                                       iterLast=O.iter - 1, nDone=1, label="stop_rule")]
     t0 = time.time()
-    O.run(MAX_CHECKS * STEPS_PER_CHECK, True)  # returns when the rule pauses YADE (or at the last step)
+    steps = MAX_CHECKS * STEPS_PER_CHECK
+    if COMPACTION:  # each friction scale of the compaction may run up to max_time before the settle's max_time
+        steps += len(COMPACTION["friction_scales"]) * COMPACTION["max_samples_per_scale"] * AVERAGE_EVERY
+    O.run(steps, True)  # returns when the rule pauses YADE (or at the last step)
     _loop_seconds = time.time() - t0
     if _rule.failure is not None:
         raise _rule.failure

@@ -111,7 +111,9 @@ def main(argv=None) -> int:
     e.add_argument("--target-phi", default="pour",
                    help="target of the target-phi method: 'pour' (the reference pours' mean) or a number")
     e.add_argument("--friction-scales", type=floats,
-                   help="target-phi method: friction scales tried in turn (default btr relax's 0.5,0.25,...,0)")
+                   help="target-phi methods: friction scales of the compaction, tried in turn (default btr relax's, 0)")
+    e.add_argument("--compaction-damping", type=float,
+                   help="target-phi methods: damping during the compaction (default btr relax's, 0.15)")
     e.add_argument("--shakes", type=int, default=10, help="btr shake cycles of the shake method (default 10)")
     e.add_argument("--reuse-pours", action="store_true",
                    help="reuse pours already finished in the output folder with the same settings and grains "
@@ -195,7 +197,7 @@ def main(argv=None) -> int:
                       pour_variants=args.pours, ranks=args.np, margin=args.margin, progress=progress,
                       methods=[m for m in args.methods.split(",") if m], damping=args.damping,
                       target_phi=args.target_phi, shakes=args.shakes, reuse_pours=args.reuse_pours,
-                      friction_scales=args.friction_scales)
+                      friction_scales=args.friction_scales, compaction_damping=args.compaction_damping)
             if args.counts:
                 run_size_study(args.scene, args.counts, args.out, **kw)
             else:

@@ -435,6 +435,24 @@ TEST_F(SceneFile, RelaxPreloadIsABoolean) {
   EXPECT_NE(msg.find("true or false"), std::string::npos) << msg;
 }
 
+TEST_F(SceneFile, TargetPhiCompactionKeys) {
+  const Scene d = load_scene(write("d.toml", kBase));
+  EXPECT_FALSE(d.relax.target_phi.has_value());
+  EXPECT_EQ(d.relax.friction_scales, (std::vector<double>{0.0}));
+  EXPECT_EQ(d.relax.compaction_damping, 0.15);
+  const Scene s = load_scene(write("t.toml", kBase + "\n[relax]\ntarget_phi = 0.62\nfriction_scales = [0.5, 0]\n"
+                                                        "compaction_damping = 0\n"));
+  EXPECT_EQ(*s.relax.target_phi, 0.62);
+  EXPECT_EQ(s.relax.friction_scales, (std::vector<double>{0.5, 0.0}));
+  EXPECT_EQ(s.relax.compaction_damping, 0.0);
+  std::string text = kBase + "\n[relax]\nfriction_scales = [0.2, 0.4]\n";
+  EXPECT_NE(error_of(text).find("relax.friction_scales: expected decreasing scales"), std::string::npos) << error_of(text);
+  text = kBase + "\n[relax]\nfriction_scales = [1.0]\n";
+  EXPECT_EQ(error_of(text).rfind(at(text, "friction_scales") + "relax.friction_scales", 0), 0u) << error_of(text);
+  text = kBase + "\n[relax]\ncompaction_damping = 1\n";
+  EXPECT_EQ(error_of(text).rfind(at(text, "compaction_damping") + "relax.compaction_damping", 0), 0u) << error_of(text);
+}
+
 TEST_F(SceneFile, TomlSyntaxErrorNamesTheLine) {
   const std::string text = replace(kBase, "count = 100", "count = = 100");
   const std::string msg = error_of(text);

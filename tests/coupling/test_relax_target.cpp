@@ -1,14 +1,13 @@
-// Target packing fraction (btr relax --target-phi): reduced-friction stages, then the settle at full
-// friction, run for real in both engines on a small BTR bed.
+// Target packing fraction (btr relax --target-phi): the compaction plan, the LIGGGHTS script's compaction
+// block, and the compaction run for real in both engines on a small BTR bed.
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
+#include <string>
 
 #include "btr/run_scene.h"
+#include "coupling/liggghts_script.h"
 #include "coupling/relax_plan.h"
 #include "coupling/relax_target.h"
 #include "coupling/yade_script.h"
@@ -38,20 +37,89 @@ Bed btr_bed() {
   return b;
 }
 
-TEST(TargetPhi, ScalesEveryFrictionAndRefusesBadSchedules) {
+btr::RelaxSettings target(double phi, std::vector<double> scales = {0.0}, double damping = 0.1) {
+  btr::RelaxSettings s;
+  s.target_phi = phi;
+  s.friction_scales = std::move(scales);
+  s.compaction_damping = damping;
+  return s;
+}
+
+TEST(TargetPhi, ScalesEveryFriction) {
   btr::Scene s = btr_test::settling_scene("scaled", 3, btr_test::container(btr::ContainerKind::Periodic));
-  const btr::Scene half = btr::with_friction_scaled(s, 0.25);
-  EXPECT_DOUBLE_EQ(half.grains.components[0].material.friction, 0.125);
-  EXPECT_DOUBLE_EQ(half.grains.components[0].material.rolling_friction, 0.025);
-  EXPECT_DOUBLE_EQ(half.grains.components[0].material.young, s.grains.components[0].material.young);
-  const std::vector<double> sched = btr::target_phi_schedule();
-  EXPECT_EQ(sched.back(), 0.0);  // the last resort is frictionless
+  const btr::Scene quarter = btr::with_friction_scaled(s, 0.25);
+  EXPECT_DOUBLE_EQ(quarter.grains.components[0].material.friction, 0.125);
+  EXPECT_DOUBLE_EQ(quarter.grains.components[0].material.rolling_friction, 0.025);
+  EXPECT_DOUBLE_EQ(quarter.grains.components[0].material.young, s.grains.components[0].material.young);
+}
+
+// The plan: off without a target or when the packing has it; the bulk window of btr measure with its top
+// lowered by the compaction the target needs; bad requests refused before any engine runs.
+TEST(TargetPhi, PlanWindowAndRefusals) {
   const Bed b = btr_bed();
-  const std::string dir = btr_test::fresh_dir("target_refused");
-  EXPECT_THROW(btr::relax_to_target_phi(b.packing, b.scene, "liggghts", {}, 1.2, dir), btr::RelaxRefused);
-  EXPECT_THROW(btr::relax_to_target_phi(b.packing, b.scene, "liggghts", {}, 0.6, dir, {0.5, 0.5}), btr::RelaxRefused);
-  EXPECT_THROW(btr::relax_to_target_phi(b.packing, b.scene, "liggghts", {}, 0.6, dir, {1.0}), btr::RelaxRefused);
-  EXPECT_THROW(btr::relax_to_target_phi(b.packing, b.scene, "liggghts", {}, 0.6, dir, {}), btr::RelaxRefused);
+  EXPECT_FALSE(btr::plan_compaction(b.packing, b.scene, {}, 1e-5, 1e-9).enabled);
+  const double phi0 = btr::bulk_packing_fraction(b.packing.grains, b.scene);
+  ASSERT_TRUE(std::isfinite(phi0));
+  const btr::CompactionPlan met = btr::plan_compaction(b.packing, b.scene, target(phi0 - 0.01), 1e-5, 1e-9);
+  EXPECT_FALSE(met.enabled);
+  EXPECT_DOUBLE_EQ(met.initial_phi, phi0);
+
+  const double goal = phi0 + 0.03;
+  const btr::CompactionPlan c = btr::plan_compaction(b.packing, b.scene, target(goal), 1e-5, 2e-9);
+  ASSERT_TRUE(c.enabled);
+  btr::MetricsOptions o;
+  const btr::BulkMeasures bulk = btr::bulk_measures(b.packing.grains, 3, b.scene.container, o);
+  double d_max = 0.0;
+  for (const btr::Grain& g : b.packing.grains) d_max = std::max(d_max, 2.0 * g.r);
+  const double m = o.margin_diameters * d_max;
+  EXPECT_TRUE(c.slab);
+  EXPECT_DOUBLE_EQ(c.window_lo.z(), bulk.window.lo.z());
+  // A bed compacting uniformly from the floor by phi0 / target keeps its top margin.
+  EXPECT_NEAR(c.window_hi.z() + m, (bulk.window.hi.z() + m) * phi0 / goal, 1e-15);
+  EXPECT_NEAR(c.window_measure, 0.012 * 0.012 * (c.window_hi.z() - c.window_lo.z()), 1e-18);
+  EXPECT_DOUBLE_EQ(c.rest_kinetic, 100.0 * 2e-9);
+  EXPECT_GT(c.max_checks_per_scale * c.steps_per_check * 1e-5, b.scene.relax.max_time - 1e-9);
+
+  EXPECT_THROW(btr::plan_compaction(b.packing, b.scene, target(1.2), 1e-5, 1e-9), btr::RelaxRefused);
+  EXPECT_THROW(btr::plan_compaction(b.packing, b.scene, target(0.7, {0.5, 0.5}), 1e-5, 1e-9), btr::RelaxRefused);
+  EXPECT_THROW(btr::plan_compaction(b.packing, b.scene, target(0.7, {1.0}), 1e-5, 1e-9), btr::RelaxRefused);
+  EXPECT_THROW(btr::plan_compaction(b.packing, b.scene, target(0.7, {}), 1e-5, 1e-9), btr::RelaxRefused);
+  EXPECT_THROW(btr::plan_compaction(b.packing, b.scene, target(0.7, {0.0}, 1.0), 1e-5, 1e-9), btr::RelaxRefused);
+  btr::RelaxSettings wide = target(0.7);
+  wide.target_margin = 50.0;
+  EXPECT_THROW(btr::plan_compaction(b.packing, b.scene, wide, 1e-5, 1e-9), btr::RelaxRefused);
+  btr::Packing clustered = b.packing;
+  clustered.grains[5].cluster = clustered.grains[6].cluster = 1;
+  EXPECT_THROW(btr::plan_compaction(clustered, b.scene, target(0.7), 1e-5, 1e-9), btr::RelaxRefused);
+}
+
+// The script: the compaction's scaled friction first, each scale tried in its block, the scene's friction
+// re-issued after it with every grain stopped, the compaction damping swapped for the settle's.
+TEST(TargetPhi, LiggghtsScriptRunsTheCompactionBeforeTheStopRule) {
+  const Bed b = btr_bed();
+  btr::RelaxSettings s = target(0.7, {0.5, 0.0}, 0.2);
+  s.damping = 0.3;
+  const std::string dir = btr_test::fresh_dir("target_script");
+  btr::export_inputs(b.packing, b.scene, "liggghts", s, dir);
+  const std::string in = read(dir + "/in.btr");
+  const std::size_t first = in.find("coefficientFriction peratomtypepair 2 0.25 0.25 0.25 0.25");
+  const std::size_t second = in.find("coefficientFriction peratomtypepair 2 0 0 0 0");
+  const std::size_t restored = in.find("coefficientFriction peratomtypepair 2 0.5 0.5 0.5 0.5");
+  const std::size_t stop = in.find("velocity all set 0.0 0.0 0.0");
+  const std::size_t loop = in.find("label btr_loop");
+  ASSERT_NE(first, std::string::npos) << in;
+  ASSERT_NE(second, std::string::npos) << in;
+  ASSERT_NE(restored, std::string::npos) << in;
+  EXPECT_LT(first, second);
+  EXPECT_LT(second, restored);
+  EXPECT_LT(restored, stop);
+  EXPECT_LT(stop, loop);
+  EXPECT_LT(in.find("fix btr_compaction_damping all viscous"), in.find("label btr_compact_1"));
+  EXPECT_LT(in.find("unfix btr_compaction_damping"), in.find("fix btr_damping all viscous"));
+  EXPECT_LT(in.find("fix btr_damping all viscous"), loop);
+  EXPECT_NE(in.find("if \"${btr_phi} >= 0.69999999999999996\""), std::string::npos);
+  EXPECT_NE(in.find("label btr_compact_rest_2"), std::string::npos);
+  EXPECT_NE(in.find("variable btr_tarm equal ${btr_time}+"), std::string::npos);
 }
 
 class TargetPhiEngine : public ::testing::TestWithParam<std::string> {
@@ -61,50 +129,62 @@ class TargetPhiEngine : public ::testing::TestWithParam<std::string> {
   }
 };
 
-// An unreachable target (0.9): the frictionless stage runs, the target is reported as not reached, the
-// settle runs at full friction, and the engines' inputs carry the scaled and the restored friction.
-// Removing friction lets the bed compact: the frictionless stage's bulk phi exceeds a plain relaxation's.
-TEST_P(TargetPhiEngine, FrictionlessStageCompactsThenFrictionIsRestored) {
+// A reachable target: the compaction stops the collapse there, restores the friction and settles; the settled
+// bed is denser than a plain relaxation's and within about the in-run estimate's error of the target.
+TEST_P(TargetPhiEngine, CompactionLandsOnAReachableTarget) {
   const Bed b = btr_bed();
   const std::string dir = btr_test::fresh_dir("target_" + GetParam());
-  const double phi_btr = btr::bulk_packing_fraction(b.packing.grains, b.scene);
-  ASSERT_TRUE(std::isfinite(phi_btr));
-  const btr::TargetPhiResult t = btr::relax_to_target_phi(b.packing, b.scene, GetParam(), {}, 0.9, dir, {0.0});
-  EXPECT_FALSE(t.reached);
-  ASSERT_EQ(t.stages.size(), 2u);
-  EXPECT_EQ(t.stages[0].friction_scale, 0.0);
-  EXPECT_EQ(t.stages[1].friction_scale, 1.0);
-  EXPECT_GT(t.stages[0].packing_fraction, phi_btr + 0.005) << "a frictionless bed compacts";
-  EXPECT_NEAR(t.stages[1].packing_fraction, btr::bulk_packing_fraction(t.settled.relaxed.grains, b.scene), 1e-12);
-  EXPECT_NE(t.settled.stop_reason, "max-time");
-  EXPECT_NEAR(t.wall_seconds, t.stages[0].wall_seconds + t.stages[1].wall_seconds, 1e-9);
+  const double phi0 = btr::bulk_packing_fraction(b.packing.grains, b.scene);
+  const double goal = phi0 + 0.025;
+  const btr::RelaxResult r = btr::relax(b.packing, b.scene, GetParam(), target(goal), dir);
+  EXPECT_TRUE(r.compaction.ran);
+  EXPECT_TRUE(r.compaction.reached);
+  EXPECT_EQ(r.compaction.friction_scale, 0.0);
+  EXPECT_GE(r.compaction.packing_fraction, goal);
+  EXPECT_GT(r.compaction.time, 0.0);
+  EXPECT_NE(r.stop_reason, "max-time");
+  const double settled = btr::bulk_packing_fraction(r.relaxed.grains, b.scene);
+  EXPECT_NEAR(settled, goal, 0.015);
 
   const btr::RelaxResult plain = btr::relax(b.packing, b.scene, GetParam(), {}, dir + "/plain");
-  EXPECT_GT(t.stages[1].packing_fraction, btr::bulk_packing_fraction(plain.relaxed.grains, b.scene) + 0.005);
+  EXPECT_GT(settled, btr::bulk_packing_fraction(plain.relaxed.grains, b.scene) + 0.01) << "the compaction compacted";
 
-  // The engine inputs: friction 0 in the reduced stage, the scene's 0.5 in the settle.
-  const std::string stage_in = GetParam() == "liggghts" ? dir + "/friction_1/in.btr" : dir + "/friction_1/relax_yade.py";
-  const std::string settle_in = GetParam() == "liggghts" ? dir + "/in.btr" : dir + "/relax_yade.py";
-  ASSERT_TRUE(std::filesystem::exists(stage_in)) << stage_in;
-  const std::string a = read(stage_in), s = read(settle_in);
-  if (GetParam() == "liggghts") {
-    EXPECT_NE(a.find("coefficientFriction peratomtypepair 2 0 0 0 0"), std::string::npos) << a;
-    EXPECT_NE(s.find("coefficientFriction peratomtypepair 2 0.5 0.5 0.5 0.5"), std::string::npos) << s;
-  }
   const nlohmann::json meta = nlohmann::json::parse(read(dir + "/relaxed.json"));
-  EXPECT_EQ(meta["target_phi"]["reached"], false);
-  EXPECT_EQ(meta["target_phi"]["stages"].size(), 2u);
+  EXPECT_EQ(meta["target_phi"]["reached"], true);
+  EXPECT_EQ(meta["target_phi"]["compaction_ran"], true);
+  EXPECT_NEAR(meta["target_phi"]["settled_bulk_packing_fraction"].get<double>(), settled, 1e-12);
+  EXPECT_DOUBLE_EQ(meta["target_phi"]["initial_bulk_packing_fraction"].get<double>(), phi0);
 }
 
-// A target the BTR bed already has: no reduced-friction stage, only the settle.
+// An unreachable target: every friction scale brings the bed to rest below it in turn, the compaction says so,
+// and the settle still runs to its stop rule.
+TEST_P(TargetPhiEngine, UnreachableTargetTriesEveryScaleThenSettles) {
+  const Bed b = btr_bed();
+  const std::string dir = btr_test::fresh_dir("target_unreached_" + GetParam());
+  btr::RelaxSettings s = target(0.75, {0.5, 0.0}, 0.3);  // far above random close packing
+  s.target_margin = 2.0;  // a window that survives the planned compaction to 0.75
+  const btr::RelaxResult r = btr::relax(b.packing, b.scene, GetParam(), s, dir);
+  EXPECT_TRUE(r.compaction.ran);
+  EXPECT_FALSE(r.compaction.reached);
+  EXPECT_EQ(r.compaction.friction_scale, 0.0) << "the last scale was reached";
+  EXPECT_LT(r.compaction.packing_fraction, 0.75);
+  EXPECT_NE(r.stop_reason, "max-time");
+  const std::string log = read(dir + (GetParam() == "liggghts" ? "/log.liggghts" : "/yade.log"));
+  EXPECT_NE(log.find(GetParam() == "liggghts" ? "BTR-COMPACTION-REST friction x 0.5" : "friction x 0.5 at rest"),
+            std::string::npos);
+  const nlohmann::json meta = nlohmann::json::parse(read(dir + "/relaxed.json"));
+  EXPECT_EQ(meta["target_phi"]["reached"], false);
+}
+
+// A target the BTR bed already has: no compaction, only the relaxation.
 TEST_P(TargetPhiEngine, TargetAlreadyMetOnlySettles) {
   const Bed b = btr_bed();
   const std::string dir = btr_test::fresh_dir("target_met_" + GetParam());
-  const btr::TargetPhiResult t = btr::relax_to_target_phi(b.packing, b.scene, GetParam(), {}, 0.3, dir);
-  EXPECT_TRUE(t.reached);
-  ASSERT_EQ(t.stages.size(), 1u);
-  EXPECT_EQ(t.stages[0].friction_scale, 1.0);
-  EXPECT_FALSE(std::filesystem::exists(dir + "/friction_1"));
+  const btr::RelaxResult r = btr::relax(b.packing, b.scene, GetParam(), target(0.3), dir);
+  EXPECT_FALSE(r.compaction.ran);
+  const nlohmann::json meta = nlohmann::json::parse(read(dir + "/relaxed.json"));
+  EXPECT_EQ(meta["target_phi"]["reached"], true);
+  EXPECT_EQ(meta["target_phi"]["compaction_ran"], false);
 }
 
 INSTANTIATE_TEST_SUITE_P(Engines, TargetPhiEngine, ::testing::Values("liggghts", "yade"));

@@ -144,7 +144,8 @@ TEST_P(YadeContainers, ScriptMatchesTheContainer) {
   EXPECT_EQ(line_starting(script, "    set_rolling("), "") << "no rolling term unless the scene sets one";
   EXPECT_EQ(line_starting(script, "DAMPING = "), "DAMPING = 0  # NewtonIntegrator damping (0 = off)")
       << "no numerical damping unless asked";
-  EXPECT_NE(script.find("damping=DAMPING"), std::string::npos);
+  EXPECT_NE(script.find("damping=COMPACTION[\"damping\"] if COMPACTION else DAMPING"), std::string::npos);
+  EXPECT_EQ(line_starting(script, "COMPACTION = "), "COMPACTION = None  # no target packing fraction");
   // The packing file: header and one line per grain, ids 1..N.
   const std::string csv = read_text(dir + "/yade_packing.csv");
   EXPECT_EQ(csv.rfind("id,x,y,z,radius,species\n1,", 0), 0u);

@@ -40,13 +40,17 @@ def test_error_vs_runtime_tiny(tmp_path, source_dir, btr_binary, liggghts):
     assert sum(m.startswith("DEM pour") for m in methods) == 2
     for r in res["rows"]:
         assert r["status"] == "ok" and r["reason"] == ""
-        assert r["wall_seconds"] > 0
+        assert r["wall_seconds"] > 0 and r["cpu_seconds"] > 0
+        assert r["cost_seconds"] == r["cpu_seconds"]  # every run here recorded its processor time
         assert all(r["errors"][k] is not None and r["errors"][k] >= 0 for k in res["measures"])
-    # the BTR + relaxation rows include the deposit's wall time
-    btr_wall = res["rows"][0]["wall_seconds"]
-    assert all(r["wall_seconds"] > btr_wall for r in res["rows"] if r["kind"] == "relax")
+    # the BTR + relaxation rows include the deposit's times; an engine run takes processor time
+    btr_row = res["rows"][0]
+    assert all(r["wall_seconds"] > btr_row["wall_seconds"] and r["cpu_seconds"] > btr_row["cpu_seconds"]
+               for r in res["rows"] if r["kind"] == "relax")
+    assert res["verdict"]["cost_basis"] == "cpu"
+    assert res["verdict"]["core_measures"] == ["packing_fraction", "coordination", "rdf"]
     md = (out / "error_vs_runtime.md").read_text()
-    header, rows = table_rows(md, "method | wall time [s] | error:")
+    header, rows = table_rows(md, "method | wall time [s] | CPU time [s] | cost / pour | error:")
     assert len(rows) == 3 + 5
     assert all(cell not in ("", "n/a", "None", "nan") for row in rows for cell in row), rows
     assert res["verdict"]["summary"] in md
@@ -61,7 +65,7 @@ def test_error_vs_runtime_keeps_going_when_a_method_fails(tmp_path, btr_binary, 
     real_relax = btr_cli.relax
 
     def relax(*args, **kw):
-        if kw.get("label") == "relax-0.005s":
+        if kw.get("label") == "relax_0.005s":
             kw["time_limit"] = 0.01
         return real_relax(*args, **kw)
 
@@ -83,7 +87,7 @@ def test_error_vs_runtime_keeps_going_when_a_method_fails(tmp_path, btr_binary, 
     md = (out / "error_vs_runtime.md").read_text()
     header, table = table_rows(md, "method | status | reason")
     assert table == [["BTR + liggghts relax 0.005 s", "fail", failed["reason"]]]
-    header, errors = table_rows(md, "method | wall time [s] | error:")
+    header, errors = table_rows(md, "method | wall time [s] | CPU time [s] | cost / pour | error:")
     assert len(errors) == 3 + 3 and "Failed methods" in res["verdict"]["summary"]
     run_json = json.loads((out / "run.json").read_text())
     steps = {s["name"]: s for s in run_json["steps"]}
@@ -92,23 +96,25 @@ def test_error_vs_runtime_keeps_going_when_a_method_fails(tmp_path, btr_binary, 
 
 def test_size_study_new_methods_failed_count_and_reused_pours(tmp_path, btr_binary, liggghts, monkeypatch):
     """--counts: one table per count; a count whose study fails (0 grains: btr deposit refuses it) is a row
-    with its reason and the study goes on; target phi records its friction stages and lands within reach of the pours' phi or
-    says it did not; pre-loading without --preload in this build is a failed row naming the option; a rerun
-    with reuse_pours takes the finished reference pours and their recorded wall times."""
+    with its reason and the study goes on; both target-phi methods record their compaction (target = the pours'
+    mean, and whether it was reached); pre-loading without --preload in this build is a failed row naming the
+    option; a rerun with reuse_pours takes the finished reference pours and their recorded times."""
     from btrdem import btr_cli, error_runtime
 
     monkeypatch.setenv("BTR_BINARY", btr_binary)
     scene = tiny_bed_toml(tmp_path / "evr.toml", count=150, max_time=0.04)
     out = tmp_path / "sizes"
     error_runtime.run_size_study(scene, [0, 150], out, relax_times=[], pour_variants=[], margin=2.0,
-                                 progress=lambda m: None, methods=("target-phi", "shake", "preload", "preload-damped"), shakes=3)
+                                 progress=lambda m: None,
+                                 methods=("target-phi", "target-phi-unbalanced", "shake", "preload", "preload-damped"),
+                                 shakes=3)
     study = json.loads((out / "size_study.json").read_text())
     assert [s["count"] for s in study["sizes"]] == [0, 150]
     small, ok = study["sizes"]
     assert small["status"] == "fail" and "deposit" in small["reason"], small
     assert ok["status"] == "ok" and ok["grains"] == 150, ok
     rows = {m["kind"]: m for m in ok["methods"]}
-    assert set(rows) == {"btr", "target", "shake", "preload", "preload-damped"}
+    assert set(rows) == {"btr", "target", "target-ub", "shake", "preload", "preload-damped"}
     has_preload = "--preload" in btr_cli.help_text(btr_binary, "relax")
     if not has_preload:
         assert rows["preload"]["status"] == "fail" and "--preload" in rows["preload"]["reason"]
@@ -116,19 +122,22 @@ def test_size_study_new_methods_failed_count_and_reused_pours(tmp_path, btr_bina
         assert rows["preload-damped"]["status"] == "ok", rows["preload-damped"]
         relaxed = json.loads((out / "n150" / "relax_preload_damped0.5" / "relaxed.json").read_text())
         assert relaxed["relax"]["damping"] == 0.5 and "preload" in relaxed, relaxed["relax"]
-    for kind in ("btr", "target", "shake"):
+    assert ok["cost_basis"] == "cpu"
+    for kind in ("btr", "target", "target-ub", "shake"):
         assert rows[kind]["status"] == "ok", rows[kind]
-        assert rows[kind]["cost_ratio"] == pytest.approx(rows[kind]["wall_seconds"] / ok["reference_pour_wall_seconds"])
+        assert rows[kind]["cost_ratio"] == pytest.approx(rows[kind]["cpu_seconds"] / ok["reference_pour_cost_seconds"])
     res = json.loads((out / "n150" / "error_vs_runtime.json").read_text())
-    target = next(r for r in res["rows"] if r["kind"] == "target")
-    stages = target["target_phi_stages"]
-    assert stages["target"] == pytest.approx(res["reference"]["mean"]["packing_fraction"])
-    assert stages["stages"][-1]["friction_scale"] == 1.0
-    scales = [s["friction_scale"] for s in stages["stages"][:-1]]
-    assert scales == sorted(scales, reverse=True) and all(s < 1 for s in scales)
-    if stages["reached"]:  # the last reduced-friction stage reached the target, the ones before did not
-        assert stages["stages"][-2]["bulk_packing_fraction"] >= stages["target"]
-    assert all(s["bulk_packing_fraction"] < stages["target"] for s in stages["stages"][:-2])
+    assert ok["reference_pour_cost_seconds"] == pytest.approx(sum(res["reference"]["cpu_seconds"]) / 3)
+    for kind, rule in (("target", "kinetic-energy"), ("target-ub", "unbalanced-force")):
+        row = next(r for r in res["rows"] if r["kind"] == kind)
+        rec = row["target_phi_record"]
+        assert rec["target"] == pytest.approx(res["reference"]["mean"]["packing_fraction"])
+        relaxed = json.loads((out / "n150" / ("relax_" + ("target_phi" if kind == "target" else "target_phi_unbalanced"))
+                              / "relaxed.json").read_text())
+        assert relaxed["relax"]["stop_rule"] == rule
+        if rec["compaction_ran"]:  # the BTR bed was looser than the pours: it compacted in the run
+            assert rec["initial_bulk_packing_fraction"] < rec["target"]
+            assert rec["reached"] == (rec["in_run_packing_fraction_at_end"] >= rec["target"])
     md = (out / "size_study.md").read_text()
     assert "## 0 grains: fail" in md and "## 150 grains" in md
     assert (out / "size_study.png").read_bytes()[:4] == b"\x89PNG"
@@ -137,4 +146,5 @@ def test_size_study_new_methods_failed_count_and_reused_pours(tmp_path, btr_bina
                                                margin=2.0, progress=lambda m: None, methods=(), reuse_pours=True)
     assert again["reference"]["reused"] == [True, True, True]
     assert again["reference"]["wall_seconds"] == res["reference"]["wall_seconds"]
+    assert again["reference"]["cpu_seconds"] == res["reference"]["cpu_seconds"]
 

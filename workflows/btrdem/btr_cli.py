@@ -29,8 +29,8 @@ def deposit(btr: str, scene_path: str, outdir, name: str = "btr", seed: int | No
                          f"{Path(res['stderr']).read_text(errors='replace').strip()[-2000:]}")
     if not csv.exists():
         raise StepFailed(f"{label}: btr deposit succeeded but wrote no {csv}")
-    return {"csv": str(csv), "wall_seconds": res["wall_seconds"], "argv": [str(a) for a in argv],
-            "stdout": res["stdout"], "stderr": res["stderr"]}
+    return {"csv": str(csv), "wall_seconds": res["wall_seconds"], "cpu_seconds": res["cpu_seconds"],
+            "argv": [str(a) for a in argv], "stdout": res["stdout"], "stderr": res["stderr"]}
 
 
 def relax(btr: str, packing_csv: str, engine: str, outdir, np: int = 1, timestep: float | None = None,
@@ -52,7 +52,8 @@ def relax(btr: str, packing_csv: str, engine: str, outdir, np: int = 1, timestep
     log = _engine_log(outdir, engine)
     res = run_command(argv, outdir, label, progress=progress, watch=log, stdout_name=f"{label}.stdout")
     err = Path(res["stderr"]).read_text(errors="replace").strip()
-    out = {"returncode": res["returncode"], "wall_seconds": res["wall_seconds"], "argv": [str(a) for a in argv],
+    out = {"returncode": res["returncode"], "wall_seconds": res["wall_seconds"], "cpu_seconds": res["cpu_seconds"],
+           "argv": [str(a) for a in argv],
            "csv": str(outdir / "relaxed.csv"), "error": err if res["returncode"] != 0 else None,
            "stdout": Path(res["stdout"]).read_text(errors="replace").strip()}
     if res["returncode"] == 0 and not (outdir / "relaxed.csv").exists():
@@ -142,4 +143,4 @@ def shake(btr: str, scene_path: str, outdir, cycles: int, count: int | None = No
     if res["returncode"] != 0 or not csv.exists():
         raise StepFailed(f"btr shake exited with status {res['returncode']} (no {csv}): "
                          f"{Path(res['stderr']).read_text(errors='replace').strip()[-1500:]}")
-    return {"csv": str(csv), "wall_seconds": res["wall_seconds"]}
+    return {"csv": str(csv), "wall_seconds": res["wall_seconds"], "cpu_seconds": res["cpu_seconds"]}

@@ -451,18 +451,20 @@ def pour(btr: Packing, outdir: str | os.PathLike, settings: PourSettings = PourS
             "method": "liggghts pour (btrdem.pour)", "pour": dict(asdict(settings), **plan),
             "stop_reason": stop, "simulated_time": final[0] if final else None,
             "final_kinetic_energy": final[1] if final else None,
-            "timings": {"pour_wall_seconds": res["wall_seconds"]}, "counts": {"grains": len(btr)}}
+            "timings": {"pour_wall_seconds": res["wall_seconds"], "pour_cpu_seconds": res["cpu_seconds"]},
+            "counts": {"grains": len(btr)}}
     poured = Packing(ids=ids, pos=xyz, radius=dump["radius"], species=btr.species.copy(), meta=meta,
                      path=str(out / f"{name}.csv"))
     if not np.allclose(poured.radius, btr.radius, rtol=1e-6):
         raise PourFailure(f"{settings.label}: radii in final.dump differ from the BTR packing's")
     poured.radius = btr.radius.copy()
     write_packing(out, name, poured)
-    summary = {"wall_seconds": res["wall_seconds"], "stop_reason": stop, "simulated_time": meta["simulated_time"],
+    summary = {"wall_seconds": res["wall_seconds"], "cpu_seconds": res["cpu_seconds"], "stop_reason": stop, "simulated_time": meta["simulated_time"],
                "timestep": plan["timestep"], "batches": plan["batches"], "packing": str(out / f"{name}.csv"),
                "seed": settings.seed}
     write_json(out / "pour_summary.json", summary)
-    progress(f"  [{settings.label}] done in {res['wall_seconds']:.1f} s wall, {meta['simulated_time']:.3g} s "
+    progress(f"  [{settings.label}] done in {res['wall_seconds']:.1f} s wall ({res['cpu_seconds']:.1f} s CPU), "
+             f"{meta['simulated_time']:.3g} s "
              f"simulated, stop: {stop}")
     return summary
 

@@ -10,6 +10,7 @@ import contextlib
 import datetime
 import os
 import platform
+import resource
 import shutil
 import subprocess
 import sys
@@ -66,7 +67,10 @@ def run_command(argv, cwd, label: str, progress=print, heartbeat: float = 15.0, 
     """Runs argv in cwd with stdout and stderr in cwd/<label>.stdout / .stderr, printing a progress line
     every `heartbeat` seconds (with status() if given, else the last line of `watch`, a log file the
     program writes).
-    Returns {returncode, wall_seconds, stdout, stderr}; never raises on a non-zero exit."""
+    Returns {returncode, wall_seconds, cpu_seconds, stdout, stderr}; never raises on a non-zero exit.
+    cpu_seconds is the processor time (user + system) of the program and the processes it waited for (an
+    engine, mpirun's ranks): unlike the wall time it does not grow when other jobs share the machine.
+    Programs are run one at a time, so the change of this process's RUSAGE_CHILDREN is that program's."""
     cwd = Path(cwd)
     cwd.mkdir(parents=True, exist_ok=True)
     safe = label.replace(" ", "_").replace("/", "_")
@@ -75,6 +79,7 @@ def run_command(argv, cwd, label: str, progress=print, heartbeat: float = 15.0, 
     full_env = dict(os.environ)
     full_env.update(env or {})
     t0 = time.monotonic()
+    cpu0 = _children_cpu()
     with open(out_path, "w") as out, open(err_path, "w") as err:
         try:
             proc = subprocess.Popen([str(a) for a in argv], cwd=cwd, stdout=out, stderr=err, env=full_env)
@@ -98,7 +103,13 @@ def run_command(argv, cwd, label: str, progress=print, heartbeat: float = 15.0, 
                         last = _last_line(watch) if watch else _last_line(out_path) or _last_line(err_path)
                     progress(f"  [{label}] running {now - t0:.0f} s{': ' + last if last else ''}")
                     next_beat = now + heartbeat
-    return {"returncode": rc, "wall_seconds": time.monotonic() - t0, "stdout": str(out_path), "stderr": str(err_path)}
+    return {"returncode": rc, "wall_seconds": time.monotonic() - t0, "cpu_seconds": _children_cpu() - cpu0,
+            "stdout": str(out_path), "stderr": str(err_path)}
+
+
+def _children_cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
 
 
 def require_success(res: dict, label: str, log: str | None = None):
