@@ -16,6 +16,7 @@ The `btr` program is $BTR_BINARY, else build/app/btr. Exit status: 0 done, 2 bad
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -155,6 +156,9 @@ def main(argv=None) -> int:
     nano.add_argument("--tiny", action="store_true", help="a few hundred grains, for tests")
 
     args = ap.parse_args(argv)
+    if getattr(args, "out", None):
+        # Every study runs btr and the engines inside its output folders: a relative -o must not nest.
+        args.out = os.path.abspath(args.out)
     try:
         if args.command == "compare":
             from btrdem.compare import compare

@@ -80,3 +80,15 @@ def test_relative_output_folders_are_not_nested(tmp_path, source_dir, btr_binary
     assert Path(dep["csv"]) == tmp_path / "rel" / "btr" / "btr.csv"
     assert (tmp_path / "rel" / "btr" / "btr.csv").is_file()
     assert not (tmp_path / "rel" / "btr" / "rel").exists()
+
+
+def test_studies_take_a_relative_output_folder(tmp_path, source_dir, btr_binary):
+    """A study given -o relative to the working directory writes there, every case ok (its btr runs happen
+    inside the case folders, where a relative path would name another folder)."""
+    p = subprocess.run([sys.executable, str(source_dir / "workflows" / "btr_workflow.py"), "brazil-nut", "--tiny",
+                        "--dims", "2", "-o", "rel"], cwd=tmp_path, capture_output=True, text=True, timeout=300,
+                       env=dict(__import__("os").environ, BTR_BINARY=btr_binary))
+    assert p.returncode == 0, p.stdout + p.stderr
+    run = json.loads((tmp_path / "rel" / "run.json").read_text())
+    assert run["status"] == "ok"
+    assert "(0 failed)" in p.stdout
