@@ -21,6 +21,7 @@ Runner add_relax_command(CLI::App& app) {
     double damping = 0.0;
     double target_phi = 0.0;
     double compaction_damping = 0.0;
+    double compaction_timestep_fraction = 0.0;
     std::vector<double> friction_scales;
     std::string stop_rule;
   };
@@ -67,6 +68,11 @@ Runner add_relax_command(CLI::App& app) {
                   "--target-phi: damping during the compaction, as --damping; 0 lets the bed collapse freely (default: "
                   "the scene's relax.compaction_damping, 0.15)")
       ->check(CLI::Range(0.0, 0.999999));
+  cmd->add_option("--compaction-timestep-fraction", o->compaction_timestep_fraction,
+                  "--target-phi: time step of the compaction as a fraction of the rule's Rayleigh / contact time "
+                  "(the settle keeps relax.timestep_fraction's step; default: the scene's "
+                  "relax.compaction_timestep_fraction, else the same step)")
+      ->check(CLI::Range(1e-9, 1.0));
   cmd->add_option("--target-margin", o->settings.target_margin,
                   "bulk window of --target-phi: this many largest diameters from floor, walls and free surface "
                   "(btr measure --margin)")
@@ -95,6 +101,8 @@ Runner add_relax_command(CLI::App& app) {
       if (cmd->count("--target-phi")) o->settings.target_phi = o->target_phi;
       if (cmd->count("--friction-scales")) o->settings.friction_scales = o->friction_scales;
       if (cmd->count("--compaction-damping")) o->settings.compaction_damping = o->compaction_damping;
+      if (cmd->count("--compaction-timestep-fraction"))
+        o->settings.compaction_timestep_fraction = o->compaction_timestep_fraction;
       btr::RelaxResult r = btr::relax(p.packing, p.scene, engine, o->settings, o->out);
       // The relaxed packing's measures, by the same definition as the deposit's, stored in relaxed.json.
       r.relaxed.meta["measures"] = measures_to_json(measure_in_scene(r.relaxed.grains, p.scene));

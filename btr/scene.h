@@ -84,6 +84,9 @@ struct RelaxSpec {
   std::optional<double> target_phi;
   std::vector<double> friction_scales{0.0};  // decreasing, in [0, 1)
   double compaction_damping = 0.15;          // in [0, 1), as `damping`; 0 = undamped collapse
+  // The compaction's time step: the run's step times compaction_timestep_fraction / timestep_fraction (the
+  // same rule with another fraction of the Rayleigh or contact time); unset: the run's step.
+  std::optional<double> compaction_timestep_fraction;
 };
 
 // A single larger grain dropped first, so it sits on the floor under the bed (Brazil nut).

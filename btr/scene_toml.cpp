@@ -217,7 +217,7 @@ class SceneParser {
     if (!s) return;
     rd_.check_keys(*s, {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep", "stop_rule",
                         "stop_unbalanced_force", "stop_displacement", "damping", "open_margin", "preload",
-                        "target_phi", "friction_scales", "compaction_damping"});
+                        "target_phi", "friction_scales", "compaction_damping", "compaction_timestep_fraction"});
     RelaxSpec& r = scene_.relax;
     r.engine = rd_.choice(*s, "engine", {"liggghts", "yade"}).value_or(r.engine);
     r.model = rd_.choice(*s, "model", {"hertz", "hooke", "hooke-stiffness"}).value_or(r.model);
@@ -253,6 +253,9 @@ class SceneParser {
     r.compaction_damping = rd_.number_or(*s, "compaction_damping", r.compaction_damping,
                                          [](double v) { return v >= 0.0 && v < 1.0; },
                                          "a damping coefficient in [0, 1) during the compaction to target_phi");
+    if (auto f = rd_.number(*s, "compaction_timestep_fraction", [](double v) { return v > 0.0 && v <= 1.0; },
+                            "a fraction in (0, 1] of the Rayleigh / contact time during the compaction"))
+      r.compaction_timestep_fraction = *f;
   }
 
   // hooke-stiffness takes no default stiffness: every component must have kn and kt from [material]

@@ -21,6 +21,8 @@ struct CompactionPlan {
   double target = 0.0;                  // bulk packing fraction (area fraction in 2D)
   std::vector<double> friction_scales;  // decreasing, in [0, 1)
   double damping = 0.0;                 // during the compaction, as RelaxPlan::damping
+  double timestep = 0.0;                // s, during the compaction (the settle uses RelaxPlan::timestep)
+  double timestep_fraction = 0.0;       // of the Rayleigh / contact time, as relax.timestep_fraction
   bool slab = false;                    // the window spans the periodic footprint (lo/hi x, y unused)
   Vec3 window_lo = Vec3::Zero(), window_hi = Vec3::Zero();  // 2D: x and z used
   double window_measure = 0.0;          // m^3 (3D) or m^2 (2D)

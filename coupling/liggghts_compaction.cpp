@@ -44,14 +44,17 @@ std::string liggghts_compaction_setup(const CompactionPlan& c, int dimension) {
 }
 
 std::string liggghts_compaction_loop(const CompactionPlan& c, const Grains& grains, const Scene& scene,
-                                     double settle_damping, double arming_time) {
+                                     double settle_damping, double settle_timestep, double arming_time) {
   std::ostringstream s;
   const std::string target = g17(c.target), rest = g17(c.rest_kinetic);
   s << "# Compaction: friction x";
   for (double f : c.friction_scales) s << " " << g6(f);
   s << " in turn (the next once the bed is at rest, kinetic energy and its mean below " << g6(c.rest_kinetic)
     << " J),\n# damping " << g6(c.damping) << ", until btr_phi >= " << g6(c.target) << ", checked every "
-    << c.steps_per_check << " steps; each scale runs at most max_time.\n";
+    << c.steps_per_check << " steps; each scale runs at most max_time;\n# time step " << g6(c.timestep)
+    << " s (fraction " << g6(c.timestep_fraction) << " of the rule's characteristic time; the settle's: "
+    << g6(settle_timestep) << " s).\n";
+  if (c.timestep != settle_timestep) s << "timestep " << g17(c.timestep) << "\n";
   for (std::size_t k = 0; k < c.friction_scales.size(); ++k) {
     const std::string scale = g6(c.friction_scales[k]), n = std::to_string(k + 1);
     if (k > 0)
@@ -76,7 +79,8 @@ std::string liggghts_compaction_loop(const CompactionPlan& c, const Grains& grai
   s << "print \"BTR-COMPACTION-END not-reached friction x " << g6(c.friction_scales.back())
     << " t = ${btr_time} s phi = ${btr_phi}\"\n"
     << "label btr_compaction_done\n"
-    << "# The scene's friction back, every grain stopped, the settle's damping, the stop rule armed anew.\n"
+    << "# The scene's friction back, every grain stopped, the settle's damping and step, the stop rule armed anew.\n"
+    << (c.timestep != settle_timestep ? "timestep " + g17(settle_timestep) + "\n" : std::string())
     << liggghts_friction_fixes(scene)
     << "velocity all set 0.0 0.0 0.0\n"
     << "set group all omegax 0.0 omegay 0.0 omegaz 0.0\n";

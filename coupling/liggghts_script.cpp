@@ -512,7 +512,8 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
     << "variable btr_tarm equal " << g17(sched.arming_time) << "\n"
     << "variable btr_armed equal 0\n"
     << "print \"BTR time step " << g17(plan.timestep) << " s: " << plan.timestep_rule << "\"\n\n";
-  if (compaction.enabled) s << liggghts_compaction_loop(compaction, grains, scene, plan.damping, stop_arming_time(grains));
+  if (compaction.enabled)
+    s << liggghts_compaction_loop(compaction, grains, scene, plan.damping, plan.timestep, stop_arming_time(grains));
   s << "label btr_loop\n"
     << "variable btr_check loop " << sched.max_checks << "\n"
     << "run " << sched.steps_per_check << " pre no post no\n"

@@ -245,7 +245,8 @@ std::vector<std::string> write_engine_inputs(const Packing& packing, const Scene
     std::cout << "compaction to bulk phi " << g6(plan.compaction.target) << " (from " << g6(plan.compaction.initial_phi)
               << "): friction x";
     for (double f : plan.compaction.friction_scales) std::cout << " " << g6(f);
-    std::cout << ", damping " << g6(plan.compaction.damping) << ", centres counted in z in ["
+    std::cout << ", damping " << g6(plan.compaction.damping) << ", time step " << g6(plan.compaction.timestep)
+              << " s, centres counted in z in ["
               << g6(plan.compaction.window_lo.z()) << ", " << g6(plan.compaction.window_hi.z()) << "] m, every "
               << plan.compaction.steps_per_check << " steps\n";
   }

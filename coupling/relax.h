@@ -26,6 +26,7 @@ struct RelaxSettings {
   std::optional<double> target_phi; // overrides the scene's relax.target_phi (relax_target.h)
   std::optional<std::vector<double>> friction_scales;  // overrides relax.friction_scales
   std::optional<double> compaction_damping;            // overrides relax.compaction_damping
+  std::optional<double> compaction_timestep_fraction;  // overrides relax.compaction_timestep_fraction
   double target_margin = 3.0;       // bulk window of the target: largest diameters from floor, walls, surface
 };
 

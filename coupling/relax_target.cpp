@@ -59,6 +59,13 @@ CompactionPlan plan_compaction(const Packing& packing, const Scene& scene, const
   c.damping = settings.compaction_damping ? *settings.compaction_damping : scene.relax.compaction_damping;
   if (!(c.damping >= 0.0 && c.damping < 1.0))
     throw RelaxRefused("target packing fraction: compaction damping must be in [0, 1), got " + num(c.damping));
+  c.timestep_fraction = settings.compaction_timestep_fraction ? *settings.compaction_timestep_fraction
+                        : scene.relax.compaction_timestep_fraction ? *scene.relax.compaction_timestep_fraction
+                                                                    : scene.relax.timestep_fraction;
+  if (!(c.timestep_fraction > 0.0 && c.timestep_fraction <= 1.0))
+    throw RelaxRefused("target packing fraction: the compaction's time-step fraction must be in (0, 1], got " +
+                       num(c.timestep_fraction));
+  c.timestep = timestep * c.timestep_fraction / scene.relax.timestep_fraction;
   for (const Grain& g : packing.grains)
     if (g.cluster != 0)
       throw RelaxRefused("target packing fraction: the packing has rigid clusters (grain " +
@@ -90,7 +97,7 @@ CompactionPlan plan_compaction(const Packing& packing, const Scene& scene, const
   c.window_measure = scene.dimension == 3 ? dx * dy * height : dx * height;
   c.steps_per_check = kCompactionCheckSteps;
   c.max_checks_per_scale =
-      std::max(1L, static_cast<long>(std::ceil(scene.relax.max_time / timestep / kCompactionCheckSteps)));
+      std::max(1L, static_cast<long>(std::ceil(scene.relax.max_time / c.timestep / kCompactionCheckSteps)));
   c.rest_kinetic = kRestLoosening * kinetic_threshold;
   c.enabled = true;
   return c;
@@ -110,6 +117,8 @@ nlohmann::json target_phi_record(const CompactionPlan& plan, const RelaxResult& 
   if (plan.enabled)
     rec.update({{"friction_scales", plan.friction_scales},
                 {"compaction_damping", plan.damping},
+                {"compaction_timestep", plan.timestep},
+                {"compaction_timestep_fraction", plan.timestep_fraction},
                 {"friction_scale_at_end", result.compaction.friction_scale},
                 {"friction_restored_at", result.compaction.time},
                 {"in_run_packing_fraction_at_end", result.compaction.packing_fraction},

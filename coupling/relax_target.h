@@ -27,7 +27,8 @@ double bulk_packing_fraction(const Grains& grains, const Scene& scene, double ma
 
 // The compaction phase of a relaxation of `packing`, from settings (which override the scene's relax.target_phi,
 // friction_scales and compaction_damping). Not enabled without a target, or when the packing's bulk packing
-// fraction already reaches it (then only `target` and `initial_phi` are set). The window is btr measure's bulk
+// fraction already reaches it (then only `target` and `initial_phi` are set). The compaction's step is
+// `timestep` (the run's) times its time-step fraction over the scene's timestep_fraction. The window is btr measure's bulk
 // window of the starting packing with its top lowered by the compaction the target needs (a bed compacting
 // uniformly from the floor: (top + m) phi0 / target - m, m the margin), so it stays inside the bed.
 // Throws RelaxRefused for a target outside (0, 1), scales that are empty or not decreasing in [0, 1), a

@@ -236,7 +236,9 @@ json scene_core_to_json(const Scene& s) {
         {"preload", s.relax.preload},
         {"target_phi", s.relax.target_phi ? json(*s.relax.target_phi) : json(nullptr)},
         {"friction_scales", s.relax.friction_scales},
-        {"compaction_damping", s.relax.compaction_damping}}},
+        {"compaction_damping", s.relax.compaction_damping},
+        {"compaction_timestep_fraction",
+         s.relax.compaction_timestep_fraction ? json(*s.relax.compaction_timestep_fraction) : json(nullptr)}}},
   };
 }
 
@@ -316,7 +318,7 @@ Scene scene_from_json(const json& j, const std::string& origin) {
   const json& r = rd.object(j, "", "relax",
                             {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep",
                              "stop_rule", "stop_unbalanced_force", "stop_displacement", "damping", "open_margin", "preload",
-                             "target_phi", "friction_scales", "compaction_damping"});
+                             "target_phi", "friction_scales", "compaction_damping", "compaction_timestep_fraction"});
   s.relax.engine = rd.string(r, "relax", "engine");
   s.relax.model = rd.string(r, "relax", "model");
   s.relax.max_time = rd.number(r, "relax", "max_time");
@@ -347,6 +349,8 @@ Scene scene_from_json(const json& j, const std::string& origin) {
     }
   }
   if (r.contains("compaction_damping")) s.relax.compaction_damping = rd.number(r, "relax", "compaction_damping");
+  if (r.contains("compaction_timestep_fraction") && !r["compaction_timestep_fraction"].is_null())
+    s.relax.compaction_timestep_fraction = rd.number(r, "relax", "compaction_timestep_fraction");
   if (j.contains("intruder")) {
     const json& in = rd.object(j, "", "intruder", {"diameter_ratio", "x", "y", "species"});
     IntruderSpec spec;

@@ -168,10 +168,11 @@ std::string compaction_constant(const RelaxPlan& plan, const Grains& grains, con
   if (!c.enabled) return "COMPACTION = None  # no target packing fraction\n";
   std::string scales;
   for (double f : c.friction_scales) scales += (scales.empty() ? "" : ", ") + num(f);
-  const long samples = std::max(1L, static_cast<long>(std::ceil(plan.max_time / plan.timestep / sched.average_every)));
+  const long samples = std::max(1L, static_cast<long>(std::ceil(plan.max_time / c.timestep / sched.average_every)));
   auto vec = [](const Vec3& v) { return "(" + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) + ")"; };
   return "COMPACTION = dict(  # btr relax --target-phi: compaction before the stop rule (class Compaction)\n"
          "    target=" + num(c.target) + ", friction_scales=[" + scales + "], damping=" + num(c.damping) + ",\n"
+         "    timestep=" + num(c.timestep) + ",  # s (fraction " + num(c.timestep_fraction) + "; the settle's: TIMESTEP)\n"
          "    slab=" + std::string(c.slab ? "True" : "False") + ", window_lo=" + vec(c.window_lo) + ", window_hi=" +
          vec(c.window_hi) + ", window_measure=" + num(c.window_measure) + ",\n"
          "    rest_kinetic=" + num(c.rest_kinetic) + ", max_samples_per_scale=" + std::to_string(samples) +

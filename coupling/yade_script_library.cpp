@@ -430,6 +430,7 @@ class Compaction:
                 b.state.vel = Vector3(0.0, 0.0, 0.0)
                 b.state.angVel = Vector3(0.0, 0.0, 0.0)
         next(e for e in O.engines if isinstance(e, NewtonIntegrator)).damping = DAMPING
+        O.dt = TIMESTEP
         self.outcome = {"reached": reached, "friction_scale": scale, "time": t, "packing_fraction": phi}
         self.active = False
         self.rule.rearm(t)
@@ -557,7 +558,7 @@ def relax():
     reason; the wall time of the loop alone is in _loop_seconds."""
     global _rule, _loop_seconds
     build_engines()
-    O.dt = TIMESTEP
+    O.dt = COMPACTION["timestep"] if COMPACTION else TIMESTEP
     log("YADE %s, %d threads, model %s, %d grains (%d clumps), %d wall bodies" % (
         getattr(yade.config, "version", "?"), O.numThreads, MODEL, len(_grains), len(_clumps), len(_walls)))
     log("time step %.6g s: %s (YADE's P-wave estimate: %.6g s)" % (TIMESTEP, TIMESTEP_RULE, utils.PWaveTimeStep()))

@@ -115,6 +115,9 @@ def main(argv=None) -> int:
                    help="target-phi methods: friction scales of the compaction, tried in turn (default btr relax's, 0)")
     e.add_argument("--compaction-damping", type=float,
                    help="target-phi methods: damping during the compaction (default btr relax's, 0.15)")
+    e.add_argument("--compaction-timestep-fraction", type=float,
+                   help="target-phi methods: time step of the compaction as a fraction of the Rayleigh / contact "
+                        "time (default: the scene's timestep_fraction, the settle's)")
     e.add_argument("--shakes", type=int, default=10, help="btr shake cycles of the shake method (default 10)")
     e.add_argument("--reuse-pours", action="store_true",
                    help="reuse pours already finished in the output folder with the same settings and grains "
@@ -201,7 +204,8 @@ def main(argv=None) -> int:
                       pour_variants=args.pours, ranks=args.np, margin=args.margin, progress=progress,
                       methods=[m for m in args.methods.split(",") if m], damping=args.damping,
                       target_phi=args.target_phi, shakes=args.shakes, reuse_pours=args.reuse_pours,
-                      friction_scales=args.friction_scales, compaction_damping=args.compaction_damping)
+                      friction_scales=args.friction_scales, compaction_damping=args.compaction_damping,
+                      compaction_timestep_fraction=args.compaction_timestep_fraction)
             if args.counts:
                 run_size_study(args.scene, args.counts, args.out, **kw)
             else:

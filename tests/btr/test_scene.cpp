@@ -441,14 +441,19 @@ TEST_F(SceneFile, TargetPhiCompactionKeys) {
   EXPECT_EQ(d.relax.friction_scales, (std::vector<double>{0.0}));
   EXPECT_EQ(d.relax.compaction_damping, 0.15);
   const Scene s = load_scene(write("t.toml", kBase + "\n[relax]\ntarget_phi = 0.62\nfriction_scales = [0.5, 0]\n"
-                                                        "compaction_damping = 0\n"));
+                                                        "compaction_damping = 0\ncompaction_timestep_fraction = 0.4\n"));
   EXPECT_EQ(*s.relax.target_phi, 0.62);
   EXPECT_EQ(s.relax.friction_scales, (std::vector<double>{0.5, 0.0}));
   EXPECT_EQ(s.relax.compaction_damping, 0.0);
+  EXPECT_EQ(*s.relax.compaction_timestep_fraction, 0.4);
+  EXPECT_FALSE(d.relax.compaction_timestep_fraction.has_value());
   std::string text = kBase + "\n[relax]\nfriction_scales = [0.2, 0.4]\n";
   EXPECT_NE(error_of(text).find("relax.friction_scales: expected decreasing scales"), std::string::npos) << error_of(text);
   text = kBase + "\n[relax]\nfriction_scales = [1.0]\n";
   EXPECT_EQ(error_of(text).rfind(at(text, "friction_scales") + "relax.friction_scales", 0), 0u) << error_of(text);
+  text = kBase + "\n[relax]\ncompaction_timestep_fraction = 1.5\n";
+  EXPECT_EQ(error_of(text).rfind(at(text, "compaction_timestep_fraction") + "relax.compaction_timestep_fraction", 0), 0u)
+      << error_of(text);
   text = kBase + "\n[relax]\ncompaction_damping = 1\n";
   EXPECT_EQ(error_of(text).rfind(at(text, "compaction_damping") + "relax.compaction_damping", 0), 0u) << error_of(text);
 }

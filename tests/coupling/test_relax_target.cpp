@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <string>
 
@@ -78,6 +79,12 @@ TEST(TargetPhi, PlanWindowAndRefusals) {
   EXPECT_NEAR(c.window_hi.z() + m, (bulk.window.hi.z() + m) * phi0 / goal, 1e-15);
   EXPECT_NEAR(c.window_measure, 0.012 * 0.012 * (c.window_hi.z() - c.window_lo.z()), 1e-18);
   EXPECT_DOUBLE_EQ(c.rest_kinetic, 100.0 * 2e-9);
+  EXPECT_DOUBLE_EQ(c.timestep, 1e-5) << "the run's step unless the compaction has its own fraction";
+  btr::RelaxSettings faster = target(goal);
+  faster.compaction_timestep_fraction = 2.0 * b.scene.relax.timestep_fraction;
+  EXPECT_DOUBLE_EQ(btr::plan_compaction(b.packing, b.scene, faster, 1e-5, 2e-9).timestep, 2e-5);
+  faster.compaction_timestep_fraction = 1.5;
+  EXPECT_THROW(btr::plan_compaction(b.packing, b.scene, faster, 1e-5, 1e-9), btr::RelaxRefused);
   EXPECT_GT(c.max_checks_per_scale * c.steps_per_check * 1e-5, b.scene.relax.max_time - 1e-9);
 
   EXPECT_THROW(btr::plan_compaction(b.packing, b.scene, target(1.2), 1e-5, 1e-9), btr::RelaxRefused);
@@ -99,6 +106,7 @@ TEST(TargetPhi, LiggghtsScriptRunsTheCompactionBeforeTheStopRule) {
   const Bed b = btr_bed();
   btr::RelaxSettings s = target(0.7, {0.5, 0.0}, 0.2);
   s.damping = 0.3;
+  s.compaction_timestep_fraction = 2.0 * b.scene.relax.timestep_fraction;
   const std::string dir = btr_test::fresh_dir("target_script");
   btr::export_inputs(b.packing, b.scene, "liggghts", s, dir);
   const std::string in = read(dir + "/in.btr");
@@ -120,6 +128,17 @@ TEST(TargetPhi, LiggghtsScriptRunsTheCompactionBeforeTheStopRule) {
   EXPECT_NE(in.find("if \"${btr_phi} >= 0.69999999999999996\""), std::string::npos);
   EXPECT_NE(in.find("label btr_compact_rest_2"), std::string::npos);
   EXPECT_NE(in.find("variable btr_tarm equal ${btr_time}+"), std::string::npos);
+  // The compaction runs at twice the settle's step, set before its first block and restored after it.
+  const std::string settle_step = btr_test::line_starting(in, "timestep        ").substr(16);
+  const double dt = std::stod(settle_step);
+  char doubled[40];
+  std::snprintf(doubled, sizeof doubled, "timestep %.17g\n", 2.0 * dt);
+  const std::size_t fast = in.find(doubled), slow = in.find("timestep " + settle_step + "\n");
+  ASSERT_NE(fast, std::string::npos) << in;
+  ASSERT_NE(slow, std::string::npos) << in;
+  EXPECT_LT(fast, in.find("label btr_compact_1"));
+  EXPECT_GT(slow, in.find("label btr_compaction_done"));
+  EXPECT_LT(slow, loop);
 }
 
 class TargetPhiEngine : public ::testing::TestWithParam<std::string> {
@@ -136,7 +155,9 @@ TEST_P(TargetPhiEngine, CompactionLandsOnAReachableTarget) {
   const std::string dir = btr_test::fresh_dir("target_" + GetParam());
   const double phi0 = btr::bulk_packing_fraction(b.packing.grains, b.scene);
   const double goal = phi0 + 0.025;
-  const btr::RelaxResult r = btr::relax(b.packing, b.scene, GetParam(), target(goal), dir);
+  btr::RelaxSettings s = target(goal);
+  s.compaction_timestep_fraction = 2.0 * b.scene.relax.timestep_fraction;  // the compaction at twice the step
+  const btr::RelaxResult r = btr::relax(b.packing, b.scene, GetParam(), s, dir);
   EXPECT_TRUE(r.compaction.ran);
   EXPECT_TRUE(r.compaction.reached);
   EXPECT_EQ(r.compaction.friction_scale, 0.0);
@@ -154,6 +175,7 @@ TEST_P(TargetPhiEngine, CompactionLandsOnAReachableTarget) {
   EXPECT_EQ(meta["target_phi"]["compaction_ran"], true);
   EXPECT_NEAR(meta["target_phi"]["settled_bulk_packing_fraction"].get<double>(), settled, 1e-12);
   EXPECT_DOUBLE_EQ(meta["target_phi"]["initial_bulk_packing_fraction"].get<double>(), phi0);
+  EXPECT_DOUBLE_EQ(meta["target_phi"]["compaction_timestep"].get<double>(), 2.0 * meta["relax"]["timestep"].get<double>());
 }
 
 // An unreachable target: every friction scale brings the bed to rest below it in turn, the compaction says so,

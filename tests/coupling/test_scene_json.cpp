@@ -39,6 +39,7 @@ Scene everything_set() {
   s.relax.damping = 0.25, s.relax.open_margin = 7.5;
   s.relax.preload = true;
   s.relax.target_phi = 0.61, s.relax.friction_scales = {0.3, 0.1, 0.0}, s.relax.compaction_damping = 0.05;
+  s.relax.compaction_timestep_fraction = 0.35;
   return s;
 }
 
@@ -84,10 +85,11 @@ TEST(SceneJson, EveryFieldSurvivesATextRoundTrip) {
   EXPECT_EQ(t.relax.target_phi, 0.61);
   EXPECT_EQ(t.relax.friction_scales, (std::vector<double>{0.3, 0.1, 0.0}));
   EXPECT_EQ(t.relax.compaction_damping, 0.05);
+  EXPECT_EQ(t.relax.compaction_timestep_fraction, 0.35);
   // A packing written before these keys existed reads with their defaults.
   nlohmann::json old = j;
   for (const char* k : {"stop_rule", "stop_unbalanced_force", "stop_displacement", "damping", "open_margin", "preload",
-                        "target_phi", "friction_scales", "compaction_damping"})
+                        "target_phi", "friction_scales", "compaction_damping", "compaction_timestep_fraction"})
     old["relax"].erase(k);
   const Scene o = scene_from_json(old, "old");
   EXPECT_EQ(o.relax.stop_rule, "kinetic-energy");
@@ -97,6 +99,7 @@ TEST(SceneJson, EveryFieldSurvivesATextRoundTrip) {
   EXPECT_FALSE(o.relax.target_phi.has_value());
   EXPECT_EQ(o.relax.friction_scales, (std::vector<double>{0.0}));
   EXPECT_EQ(o.relax.compaction_damping, 0.15);
+  EXPECT_FALSE(o.relax.compaction_timestep_fraction.has_value());
   EXPECT_EQ(scene_to_json(t), j);
 
   Scene no_step = s;

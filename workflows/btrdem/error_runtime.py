@@ -13,6 +13,8 @@ standard deviation the error floor. Methods, each with its wall time measured in
                            compaction damping) until its bulk packing fraction reaches X, then the friction is
                            restored, the grains stopped, and the bed settles with damping D on the scene's rule
   BTR + target phi (unbalanced-force rule)  the same, settled until YADE's unbalanced-force ratio < 1e-3
+                           (both with --compaction-timestep-fraction F when the study sets it: the compaction at a
+                           larger fraction of the Rayleigh time than the settle)
   BTR + K shakes + relax   `btr shake` (K Jullien-Meakin cycles of BTR redeposition) then `btr relax`
   BTR + pre-loaded relax   `btr relax --preload` (a failed row with the reason where this build has none)
   BTR + pre-loaded damped  `btr relax --preload --damping D --max-overlap 0.1`
@@ -101,7 +103,8 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
                          count: int | None = None, relax_times=None, pour_variants=None, ranks: int = 1,
                          margin: float | None = None, progress=print, methods=METHODS, damping: float = 0.5,
                          target_phi="pour", shakes: int = 10, reuse_pours: bool = False,
-                         friction_scales=None, compaction_damping: float | None = None) -> dict:
+                         friction_scales=None, compaction_damping: float | None = None,
+                         compaction_timestep_fraction: float | None = None) -> dict:
     if ref_seeds < 3:
         raise StepFailed(f"error-vs-runtime: --ref-seeds: expected at least 3 (the seed-to-seed spread is the "
                          f"error floor), got {ref_seeds}")
@@ -112,7 +115,8 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
                               "count": count, "relax_times": relax_times, "pour_variants": pour_variants, "np": ranks,
                               "margin": margin, "methods": list(methods), "damping": damping,
                               "target_phi": target_phi, "shakes": shakes, "reuse_pours": reuse_pours,
-                              "friction_scales": friction_scales, "compaction_damping": compaction_damping})
+                              "friction_scales": friction_scales, "compaction_damping": compaction_damping,
+                              "compaction_timestep_fraction": compaction_timestep_fraction})
     bad = [m for m in methods if m not in METHODS]
     if bad:
         raise StepFailed(f"error-vs-runtime: --methods: expected some of {', '.join(METHODS)}, got {', '.join(bad)}")
@@ -206,9 +210,12 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
     target_args = (["--target-phi", repr(float(target)), "--damping", repr(float(damping))] +
                    (["--friction-scales", scales] if scales else []) +
                    (["--compaction-damping", repr(float(compaction_damping))] if compaction_damping is not None else []) +
+                   (["--compaction-timestep-fraction", repr(float(compaction_timestep_fraction))]
+                    if compaction_timestep_fraction is not None else []) +
                    (["--target-margin", repr(float(margin))] if margin is not None else []))
     settings_label = (f" friction scales {scales}" if scales else "") + \
-        (f" compaction damping {compaction_damping:g}" if compaction_damping is not None else "")
+        (f" compaction damping {compaction_damping:g}" if compaction_damping is not None else "") + \
+        (f" compaction step fraction {compaction_timestep_fraction:g}" if compaction_timestep_fraction is not None else "")
     for kind, rule in (("target-phi", None), ("target-phi-unbalanced", "unbalanced-force")):
         if kind not in methods:
             continue
@@ -444,6 +451,7 @@ def finished_study(folder: Path, scene_path: str, count: int, kwargs: dict) -> d
             "methods": list(kwargs.get("methods", METHODS)), "damping": kwargs.get("damping", 0.5),
             "target_phi": kwargs.get("target_phi", "pour"), "shakes": kwargs.get("shakes", 10),
             "friction_scales": kwargs.get("friction_scales"), "compaction_damping": kwargs.get("compaction_damping"),
+            "compaction_timestep_fraction": kwargs.get("compaction_timestep_fraction"),
             "relax_times": kwargs.get("relax_times"),
             "pour_variants": None if kwargs.get("pour_variants") is None else [list(v) for v in kwargs["pour_variants"]]}
     if run.get("status") != "ok" or any(st.get(k) != v for k, v in want.items()):
