@@ -59,7 +59,7 @@ class Placer {
     rho_ = std::sqrt(inertia / mass);
     dof_ = e.dimension == 3 ? std::vector<int>{0, 1, 2, 3, 4, 5} : std::vector<int>{0, 2, 4};
     h_max_ = 0.25 * r_min_;
-    margin_ = h_max_;
+    margin_ = 2.0 * h_max_;
   }
 
   void run(const ClusterDrop& drop);
@@ -162,7 +162,10 @@ class Placer {
   Vec3 G_ = Vec3::Zero();
   std::int32_t number_;
   double r_min_, rho_, h_max_;
-  double margin_;  // obstacles within margin_ of a member are its candidates
+  // Obstacles within margin_ of a member are its candidates: a step moves a member at most h_max_
+  // (plus its projection), so the overlap test after a step sees every obstacle the step can reach;
+  // a step whose projection went further (a diverging Newton) is refused.
+  double margin_;
   std::vector<int> dof_;
   std::vector<std::vector<Obstacle>> walls_;  // per member radius
   std::vector<Contact> cand_;                 // obstacles within reach of a member
@@ -416,8 +419,9 @@ void Placer::run(const ClusterDrop& drop) {
       project(loaded);
     }
     // A step after which the projection leaves a member inside an obstacle (closing the loaded contacts
-    // and opening the others is inconsistent there) is refused like one that does not go down.
-    bool overlapping = false;
+    // and opening the others is inconsistent there) or took it beyond the candidates' margin (it
+    // diverged) is refused like one that does not go down.
+    bool overlapping = !(moved_from(G0, q0) < margin_);
     refresh_gaps();
     for (const Contact& c : cand_) overlapping |= c.gap < -1e-10 * r_min_;
     if (overlapping || !(G_.z() < G0.z())) {
