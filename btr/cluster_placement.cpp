@@ -403,7 +403,8 @@ void Placer::run(const ClusterDrop& drop) {
     project(loaded);
     // A support that unloads within the step: go back to just past the point where it does (to a
     // member displacement of 1e-10 r), so the path leaves it where the single-grain engine does.
-    if (lifts_off(loaded)) {
+    const bool lifted = lifts_off(loaded);
+    if (lifted) {
       double lo = 0.0, hi = s;
       while ((hi - lo) * fastest > 1e-10 * r_min_) {
         const double mid = 0.5 * (lo + hi);
@@ -420,11 +421,15 @@ void Placer::run(const ClusterDrop& drop) {
     }
     // A step after which the projection leaves a member inside an obstacle (closing the loaded contacts
     // and opening the others is inconsistent there) or took it beyond the candidates' margin (it
-    // diverged) is refused like one that does not go down.
+    // diverged) is refused like one that does not go down. A step cut short where a support unloads
+    // counts as going down if it does not go up: over ~1e-10 r the descent is below the resolution of
+    // z when gravity is almost balanced, and refusing it would end the descent by the halving rule
+    // with the old supports, short of balance (a cluster the check found unsupported).
     bool overlapping = !(moved_from(G0, q0) < margin_);
     refresh_gaps();
     for (const Contact& c : cand_) overlapping |= c.gap < -1e-10 * r_min_;
-    if (overlapping || !(G_.z() < G0.z())) {
+    const bool lower = G_.z() < G0.z() || (lifted && G_.z() <= G0.z());
+    if (overlapping || !lower) {
       G_ = G0;
       q_ = q0;
       h *= 0.5;
