@@ -5,7 +5,8 @@
 // It rests when gravity's generalised force lies in the cone of the contacts' wrenches (normal
 // forces through the members' centres, as for a single grain: the generalisation of the 3-support
 // test to force and torque balance). Steps are bounded by conservative advancement (no member can
-// reach an obstacle it is not touching), loaded contacts are kept closed by a Newton projection, and
+// reach an obstacle it is not touching), loaded contacts are kept closed by a Newton projection (at
+// rest, where it does not converge, by Newton steps that also keep every other gap >= 0), and
 // a step that does not lower the centre of mass is halved; when the step becomes negligible the
 // cluster rests (a smooth minimum or a wedge), so no degenerate case loops. An event budget per
 // cluster ends the rest with an error naming the cluster.
@@ -15,9 +16,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include "btr/deposition.h"
+#include "btr/nnls.h"
 #include "btr/obstacle.h"
 #include "btr/walls.h"
 
@@ -31,45 +34,6 @@ using VecX = Eigen::VectorXd;
 // exactly by the Newton projection) instead of being approached in ever shorter steps.
 constexpr double kContactTol = 1e-6;
 using MatX = Eigen::MatrixXd;
-
-// Lawson-Hanson non-negative least squares: argmin |A x - b| over x >= 0.
-VecX nnls(const MatX& A, const VecX& b) {
-  const int k = static_cast<int>(A.cols());
-  VecX x = VecX::Zero(k);
-  std::vector<char> passive(k, 0);
-  const double tol = 1e-13 * std::max(1.0, A.norm()) * std::max(1.0, b.norm());
-  for (int outer = 0; outer < 3 * k + 10; ++outer) {
-    const VecX w = A.transpose() * (b - A * x);
-    int j = -1;
-    double best = tol;
-    for (int i = 0; i < k; ++i)
-      if (!passive[i] && w(i) > best) { best = w(i); j = i; }
-    if (j < 0) break;
-    passive[j] = 1;
-    for (int inner = 0; inner < 3 * k + 10; ++inner) {
-      std::vector<int> idx;
-      for (int i = 0; i < k; ++i)
-        if (passive[i]) idx.push_back(i);
-      MatX sub(A.rows(), static_cast<Eigen::Index>(idx.size()));
-      for (std::size_t a = 0; a < idx.size(); ++a) sub.col(a) = A.col(idx[a]);
-      const VecX z = sub.completeOrthogonalDecomposition().solve(b);
-      bool positive = true;
-      for (Eigen::Index a = 0; a < z.size(); ++a) positive &= z(a) > 0.0;
-      if (positive) {
-        x.setZero();
-        for (std::size_t a = 0; a < idx.size(); ++a) x(idx[a]) = z(a);
-        break;
-      }
-      double alpha = 1.0;
-      for (std::size_t a = 0; a < idx.size(); ++a)
-        if (z(a) <= 0.0) alpha = std::min(alpha, x(idx[a]) / (x(idx[a]) - z(a)));
-      for (std::size_t a = 0; a < idx.size(); ++a) x(idx[a]) += alpha * (z(a) - x(idx[a]));
-      for (int i = 0; i < k; ++i)
-        if (passive[i] && x(i) <= 1e-15) { passive[i] = 0; x(i) = 0.0; }
-    }
-  }
-  return x;
-}
 
 struct Contact {
   int member;
@@ -95,6 +59,7 @@ class Placer {
     rho_ = std::sqrt(inertia / mass);
     dof_ = e.dimension == 3 ? std::vector<int>{0, 1, 2, 3, 4, 5} : std::vector<int>{0, 2, 4};
     h_max_ = 0.25 * r_min_;
+    margin_ = 2.0 * h_max_;
   }
 
   void run(const ClusterDrop& drop);
@@ -118,6 +83,12 @@ class Placer {
 
  private:
   Vec3 member(std::size_t k) const { return G_ + q_ * shape_.offsets[k]; }
+  // The largest displacement of a member since the cluster was at (G0, q0).
+  double moved_from(const Vec3& G0, const Eigen::Quaterniond& q0) const {
+    double d = 0.0;
+    for (std::size_t k = 0; k < shape_.size(); ++k) d = std::max(d, (member(k) - (G0 + q0 * shape_.offsets[k])).norm());
+    return d;
+  }
   [[noreturn]] void fail(const std::string& why) const {
     std::ostringstream s;
     s << "cluster " << number_ << " (" << shape_.size() << " grains, centre of mass at (" << G_.x() << ", "
@@ -146,10 +117,16 @@ class Placer {
     const double angle = w.norm();
     if (angle > 0.0) q_ = (Eigen::Quaterniond(Eigen::AngleAxisd(angle, w / angle)) * q_).normalized();
   }
-  void project(const std::vector<std::int64_t>& loaded);
+  bool project(const std::vector<std::int64_t>& loaded);
+  bool settle(const std::vector<std::int64_t>& loaded);
+  void rest_projection(const std::vector<std::int64_t>& loaded);
+  static std::int64_t key(const Contact& c) { return c.o.key * (std::int64_t(1) << 20) + c.member; }
+  static bool is_loaded(const Contact& c, const std::vector<std::int64_t>& loaded) {
+    return std::find(loaded.begin(), loaded.end(), key(c)) != loaded.end();
+  }
   // Projection of gravity (-e_z on the centre of mass) onto the allowed motions at the current
   // state, in the metric of the mass matrix: u' = a + C^T lambda, lambda >= 0 (non-negative least
-  // squares). Returns the loaded contacts' keys (obstacle key * 64 + member).
+  // squares). Returns the loaded contacts' keys (key()).
   std::vector<std::int64_t> descend(VecX& u) {
     refresh_gaps();
     const double contact_tol = kContactTol * r_min_;
@@ -165,7 +142,7 @@ class Placer {
     u = active.empty() ? a : VecX(a + Ct * lambda);
     std::vector<std::int64_t> loaded;
     for (std::size_t i = 0; i < active.size(); ++i)
-      if (lambda(i) > 1e-12) loaded.push_back(active[i]->o.key * (std::int64_t(1) << 20) + active[i]->member);
+      if (lambda(i) > 1e-12) loaded.push_back(key(*active[i]));
     return loaded;
   }
   bool lifts_off(const std::vector<std::int64_t>& before) {
@@ -185,6 +162,10 @@ class Placer {
   Vec3 G_ = Vec3::Zero();
   std::int32_t number_;
   double r_min_, rho_, h_max_;
+  // Obstacles within margin_ of a member are its candidates: a step moves a member at most h_max_
+  // (plus its projection), so the overlap test after a step sees every obstacle the step can reach;
+  // a step whose projection went further (a diverging Newton) is refused.
+  double margin_;
   std::vector<int> dof_;
   std::vector<std::vector<Obstacle>> walls_;  // per member radius
   std::vector<Contact> cand_;                 // obstacles within reach of a member
@@ -229,31 +210,95 @@ void Placer::fall() {
   G_.z() -= std::max(0.0, t);
 }
 
-// Newton steps closing the loaded contacts and opening any overlap the curved step made.
-void Placer::project(const std::vector<std::int64_t>& loaded) {
+// Newton steps closing the loaded contacts and opening any overlap the curved step made. Returns
+// whether it converged: every loaded contact closed and no obstacle entered, to 1e-13 r.
+bool Placer::project(const std::vector<std::int64_t>& loaded) {
   const double tol = 1e-13 * r_min_;
+  const Eigen::Index d = static_cast<Eigen::Index>(dof_.size());
   for (int iter = 0; iter < 8; ++iter) {
     refresh_gaps();
     std::vector<const Contact*> set;
     double worst = 0.0;
-    for (const Contact& c : cand_) {
-      const bool is_loaded =
-          std::find(loaded.begin(), loaded.end(), c.o.key * (std::int64_t(1) << 20) + c.member) != loaded.end();
-      if (is_loaded || c.gap < 0.0) {
+    for (const Contact& c : cand_)
+      if (is_loaded(c, loaded) || c.gap < 0.0) {
         set.push_back(&c);
         worst = std::max(worst, std::abs(c.gap));
       }
-    }
-    if (worst <= tol) return;
-    MatX J(static_cast<Eigen::Index>(set.size()), static_cast<Eigen::Index>(dof_.size()));
+    if (worst <= tol) return true;
+    MatX J(static_cast<Eigen::Index>(set.size()), d);
     VecX g(static_cast<Eigen::Index>(set.size()));
     for (std::size_t a = 0; a < set.size(); ++a) {
       J.row(a) = row(*set[a]);
       g(a) = set[a]->gap;
     }
-    const VecX du = J.completeOrthogonalDecomposition().solve(-g);
-    move(du, 1.0);
+    move(J.completeOrthogonalDecomposition().solve(-g), 1.0);
   }
+  return false;
+}
+
+// The projection above solves "loaded and overlapping contacts closed" as equations. Where two
+// obstacles take turns (closing a member's overlap with a wall pushes it into a neighbour, which the
+// next step pushes back: a grain in a corner) it alternates and stops with a member inside one of
+// them, up to ~1e-7 r in 3D. These Newton steps keep the loaded contacts as equations and every other
+// gap >= 0 as inequalities, each step the shortest such move (least-distance programming), so they
+// cannot alternate. Returns whether they converged to 1e-13 r.
+bool Placer::settle(const std::vector<std::int64_t>& loaded) {
+  const double tol = 1e-13 * r_min_;
+  const Eigen::Index d = static_cast<Eigen::Index>(dof_.size());
+  for (int iter = 0; iter < 16; ++iter) {
+    refresh_gaps();
+    std::vector<const Contact*> eq, ineq;
+    double worst = 0.0;
+    for (const Contact& c : cand_) {
+      const bool on = is_loaded(c, loaded);
+      (on ? eq : ineq).push_back(&c);
+      worst = std::max(worst, on ? std::abs(c.gap) : -c.gap);
+    }
+    if (worst <= tol) return true;
+    // Loaded contacts: u = u_p + N z, u_p their minimum-norm closing move, N their null space.
+    VecX u_p = VecX::Zero(d);
+    MatX N = MatX::Identity(d, d);
+    if (!eq.empty()) {
+      MatX J(static_cast<Eigen::Index>(eq.size()), d);
+      VecX g(static_cast<Eigen::Index>(eq.size()));
+      for (std::size_t a = 0; a < eq.size(); ++a) {
+        J.row(a) = row(*eq[a]);
+        g(a) = eq[a]->gap;
+      }
+      const Eigen::JacobiSVD<MatX> svd(J, Eigen::ComputeFullU | Eigen::ComputeFullV);
+      u_p = svd.solve(-g);
+      N = svd.matrixV().rightCols(d - svd.rank());
+    }
+    MatX G(static_cast<Eigen::Index>(ineq.size()), N.cols());
+    VecX h(static_cast<Eigen::Index>(ineq.size()));
+    for (std::size_t a = 0; a < ineq.size(); ++a) {
+      const Eigen::RowVectorXd J = row(*ineq[a]);
+      G.row(a) = J * N;
+      h(a) = -ineq[a]->gap - J.dot(u_p);
+    }
+    const std::optional<VecX> z = least_distance(G, h);
+    if (!z) return false;  // the loaded contacts cannot stay closed without entering another obstacle
+    move(u_p + N * *z, 1.0);
+  }
+  return false;
+}
+
+// At rest the loaded contacts (gaps within kContactTol) are closed exactly and no member may be left
+// inside an obstacle (the check allows 1e-9 r). A back-off out of a residual overlap would open the
+// loaded contacts by as much (~1e-7 r: the check's contact tolerance), so instead, where the plain
+// projection does not converge, the constrained steps start again from the position before it. The
+// plain projection stays first so that every rest position it reached before is unchanged. A result
+// is taken only if no member moved as far as the candidates' margin; otherwise the cluster rests where
+// the descent stopped (no overlap beyond the step's 1e-10 r, contacts within kContactTol), by rule.
+void Placer::rest_projection(const std::vector<std::int64_t>& loaded) {
+  const Vec3 G0 = G_;
+  const Eigen::Quaterniond q0 = q_;
+  if (project(loaded) && moved_from(G0, q0) < margin_) return;
+  G_ = G0;
+  q_ = q0;
+  if (settle(loaded) && moved_from(G0, q0) < margin_) return;
+  G_ = G0;
+  q_ = q0;
 }
 
 void Placer::run(const ClusterDrop& drop) {
@@ -292,7 +337,7 @@ void Placer::run(const ClusterDrop& drop) {
       if (z_window - G_.z() < 1e-10 * r_min_) { rest = true; break; }
       z_window = G_.z();
     }
-    gather(h_max_);
+    gather(margin_);
     bool touching = false;
     for (const Contact& c : cand_) touching |= c.gap <= contact_tol;
     if (!touching) {
@@ -302,7 +347,7 @@ void Placer::run(const ClusterDrop& drop) {
     VecX u;
     const std::vector<std::int64_t> loaded = descend(u);
     if (u.norm() <= 1e-9) {
-      project(loaded);  // loaded contacts within kContactTol closed exactly
+      rest_projection(loaded);
       rest = true;
       break;
     }
@@ -358,7 +403,8 @@ void Placer::run(const ClusterDrop& drop) {
     project(loaded);
     // A support that unloads within the step: go back to just past the point where it does (to a
     // member displacement of 1e-10 r), so the path leaves it where the single-grain engine does.
-    if (lifts_off(loaded)) {
+    const bool lifted = lifts_off(loaded);
+    if (lifted) {
       double lo = 0.0, hi = s;
       while ((hi - lo) * fastest > 1e-10 * r_min_) {
         const double mid = 0.5 * (lo + hi);
@@ -374,11 +420,16 @@ void Placer::run(const ClusterDrop& drop) {
       project(loaded);
     }
     // A step after which the projection leaves a member inside an obstacle (closing the loaded contacts
-    // and opening the others is inconsistent there) is refused like one that does not go down.
-    bool overlapping = false;
+    // and opening the others is inconsistent there) or took it beyond the candidates' margin (it
+    // diverged) is refused like one that does not go down. A step cut short where a support unloads
+    // counts as going down if it does not go up: over ~1e-10 r the descent is below the resolution of
+    // z when gravity is almost balanced, and refusing it would end the descent by the halving rule
+    // with the old supports, short of balance (a cluster the check found unsupported).
+    bool overlapping = !(moved_from(G0, q0) < margin_);
     refresh_gaps();
     for (const Contact& c : cand_) overlapping |= c.gap < -1e-10 * r_min_;
-    if (overlapping || !(G_.z() < G0.z())) {
+    const bool lower = G_.z() < G0.z() || (lifted && G_.z() <= G0.z());
+    if (overlapping || !lower) {
       G_ = G0;
       q_ = q0;
       h *= 0.5;
