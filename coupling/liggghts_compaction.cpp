@@ -1,4 +1,5 @@
 #include "coupling/liggghts_compaction.h"
+#include "coupling/number_text.h"
 
 #include <cstdio>
 #include <sstream>
@@ -7,22 +8,6 @@
 #include "coupling/relax_target.h"
 
 namespace btr {
-
-namespace {
-
-std::string g17(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
-
-std::string g6(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
-
-}  // namespace
 
 std::string liggghts_compaction_setup(const CompactionPlan& c, int dimension) {
   std::ostringstream s;

@@ -1,6 +1,7 @@
 // Writes the LIGGGHTS inputs: btr.data (read_data, atom_style granular) and in.btr (the script).
 // Syntax checked against the LIGGGHTS 3.8 manual (liggghts-doc) and by running liggghts.
 #include "coupling/liggghts_script.h"
+#include "coupling/number_text.h"
 
 #include <algorithm>
 #include <array>
@@ -29,18 +30,6 @@ constexpr long kAveragedSamples = 20;     // kinetic-energy samples in each chec
 // samples (every sample is an MPI_Allreduce, a synchronisation of all ranks) made 2 MPI ranks slower
 // than 1 (coupling/README.md, "MPI").
 constexpr long kMinStepsPerCheck = 1000;
-
-std::string g17(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
-
-std::string g6(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
 
 // The simulation box: periodic where the container is, fixed at the walls and, for "open", at the removal
 // region; shrink-wrapped upwards for every container.

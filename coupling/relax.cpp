@@ -1,6 +1,7 @@
 // DEM relaxation, engine-independent part: plan (time step, overlap, stop threshold), inputs, run,
 // checks of the result, output files. The engines live behind EngineAdapter.
 #include "coupling/relax.h"
+#include "coupling/number_text.h"
 
 #include <stdexcept>
 #include <algorithm>
@@ -30,12 +31,6 @@ namespace {
 
 constexpr int kLogTailLines = 25;
 constexpr const char* kConsoleFile = "console.log";  // the engine's stdout and stderr
-
-std::string g6(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
 
 void check_inputs(const Packing& packing, const Scene& scene) {
   if (packing.grains.empty()) throw RelaxRefused("the packing has no grains");

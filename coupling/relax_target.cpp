@@ -1,4 +1,5 @@
 #include "coupling/relax_target.h"
+#include "coupling/number_text.h"
 
 #include <algorithm>
 #include <cmath>
@@ -19,11 +20,6 @@ constexpr long kCompactionCheckSteps = 50;
 // the stop threshold: the compaction only needs the rearrangement to end, not the settle's rest.
 constexpr double kRestLoosening = 100.0;
 
-std::string num(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
 }  // namespace
 
 Scene with_friction_scaled(const Scene& scene, double scale) {
@@ -49,7 +45,7 @@ CompactionPlan plan_compaction(const Packing& packing, const Scene& scene, const
   if (!target) return c;
   c.target = *target;
   if (!(c.target > 0.0 && c.target < 1.0))
-    throw RelaxRefused("target packing fraction must be in (0, 1), got " + num(c.target));
+    throw RelaxRefused("target packing fraction must be in (0, 1), got " + g6(c.target));
   c.friction_scales = settings.friction_scales ? *settings.friction_scales : scene.relax.friction_scales;
   if (c.friction_scales.empty()) throw RelaxRefused("target packing fraction: no friction scale to try");
   for (std::size_t k = 0; k < c.friction_scales.size(); ++k)
@@ -58,13 +54,13 @@ CompactionPlan plan_compaction(const Packing& packing, const Scene& scene, const
       throw RelaxRefused("target packing fraction: friction scales must decrease within [0, 1)");
   c.damping = settings.compaction_damping ? *settings.compaction_damping : scene.relax.compaction_damping;
   if (!(c.damping >= 0.0 && c.damping < 1.0))
-    throw RelaxRefused("target packing fraction: compaction damping must be in [0, 1), got " + num(c.damping));
+    throw RelaxRefused("target packing fraction: compaction damping must be in [0, 1), got " + g6(c.damping));
   c.timestep_fraction = settings.compaction_timestep_fraction ? *settings.compaction_timestep_fraction
                         : scene.relax.compaction_timestep_fraction ? *scene.relax.compaction_timestep_fraction
                                                                     : scene.relax.timestep_fraction;
   if (!(c.timestep_fraction > 0.0 && c.timestep_fraction <= 1.0))
     throw RelaxRefused("target packing fraction: the compaction's time-step fraction must be in (0, 1], got " +
-                       num(c.timestep_fraction));
+                       g6(c.timestep_fraction));
   c.timestep = timestep * c.timestep_fraction / scene.relax.timestep_fraction;
   for (const Grain& g : packing.grains)
     if (g.cluster != 0)
@@ -91,7 +87,7 @@ CompactionPlan plan_compaction(const Packing& packing, const Scene& scene, const
   c.window_hi.z() = (b.window.hi.z() + m) * c.initial_phi / c.target - m;
   if (!(c.window_hi.z() > c.window_lo.z()))
     throw RelaxRefused("target packing fraction: the bed is too shallow to keep a bulk window through a compaction "
-                       "from " + num(c.initial_phi) + " to " + num(c.target) + "; use a smaller --target-margin");
+                       "from " + g6(c.initial_phi) + " to " + g6(c.target) + "; use a smaller --target-margin");
   const double height = c.window_hi.z() - c.window_lo.z();
   const double dx = c.window_hi.x() - c.window_lo.x(), dy = c.window_hi.y() - c.window_lo.y();
   c.window_measure = scene.dimension == 3 ? dx * dy * height : dx * height;

@@ -1,4 +1,5 @@
 #include "coupling/timestep.h"
+#include "coupling/number_text.h"
 
 #include <algorithm>
 #include <cmath>
@@ -12,12 +13,6 @@
 namespace btr {
 
 namespace {
-
-std::string fmt(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
 
 // Smallest and largest radius present for each component index.
 struct RadiusRange { double min = std::numeric_limits<double>::infinity(), max = 0.0; };
@@ -93,8 +88,8 @@ StableStep stable_timestep(const Grains& grains, const Scene& scene, DampedMode 
   }
   const double verlet = std::sqrt(1.0 + zeta * zeta) - zeta;
   auto damping_note = [&]() {
-    return " x damping factor " + fmt(s.damping_factor) + " (lowest restitution " + fmt(e_low) + ", " + which +
-           " damping ratio " + fmt(zeta) + ")";
+    return " x damping factor " + g6(s.damping_factor) + " (lowest restitution " + g6(e_low) + ", " + which +
+           " damping ratio " + g6(zeta) + ")";
   };
 
   if (scene.relax.model == "hertz") {
@@ -109,10 +104,10 @@ StableStep stable_timestep(const Grains& grains, const Scene& scene, DampedMode 
     s.characteristic_time = best;
     s.damping_factor = verlet;
     s.step = s.fraction * s.damping_factor * best;
-    s.rule = "Rayleigh time pi R sqrt(rho/G)/(0.1631 nu + 0.8766) = " + fmt(best) + " s (Hertz; smallest grain R = " +
-             fmt(ranges.at(best_c).min) + " m of species " + std::to_string(c.species) + ", rho = " + fmt(c.density) +
-             " kg/m^3, E = " + fmt(c.material.young) + " Pa, nu = " + fmt(c.material.poisson) + ") x " +
-             fmt(s.fraction) + damping_note() + " = " + fmt(s.step) + " s";
+    s.rule = "Rayleigh time pi R sqrt(rho/G)/(0.1631 nu + 0.8766) = " + g6(best) + " s (Hertz; smallest grain R = " +
+             g6(ranges.at(best_c).min) + " m of species " + std::to_string(c.species) + ", rho = " + g6(c.density) +
+             " kg/m^3, E = " + g6(c.material.young) + " Pa, nu = " + g6(c.material.poisson) + ") x " +
+             g6(s.fraction) + damping_note() + " = " + g6(s.step) + " s";
     return s;
   }
   if (scene.relax.model == "hooke-stiffness") {
@@ -125,17 +120,17 @@ StableStep stable_timestep(const Grains& grains, const Scene& scene, DampedMode 
       const double w2 = kn / m_eff - 0.25 * gamma_n * gamma_n;
       if (!(w2 > 0.0))
         throw std::runtime_error("relax.model = \"hooke-stiffness\": " + label + " is overdamped (gamma_n/2 = " +
-                                 fmt(0.5 * gamma_n) + " 1/s >= sqrt(kn/m_eff) = " + fmt(std::sqrt(kn / m_eff)) +
+                                 g6(0.5 * gamma_n) + " 1/s >= sqrt(kn/m_eff) = " + g6(std::sqrt(kn / m_eff)) +
                                  " 1/s); no contact time");
       const double t = M_PI / std::sqrt(w2);
-      if (t < best) best = t, what = label + ": kn = " + fmt(kn) + " N/m, m_eff = " + fmt(m_eff) + " kg, gamma_n = " +
-                                     fmt(gamma_n) + " 1/s";
+      if (t < best) best = t, what = label + ": kn = " + g6(kn) + " N/m, m_eff = " + g6(m_eff) + " kg, gamma_n = " +
+                                     g6(gamma_n) + " 1/s";
     };
     for (const auto& [ca, ra] : ranges) {
       const Component& a = comps[ca];
       for (double r1 : {ra.min, ra.max}) {
         const double m1 = grain_mass(r1, a.density);
-        consider(a.material.kn, a.material.gamma_n, m1, "grain R = " + fmt(r1) + " m of species " +
+        consider(a.material.kn, a.material.gamma_n, m1, "grain R = " + g6(r1) + " m of species " +
                                                             std::to_string(a.species) + " on a wall");
         for (const auto& [cb, rb] : ranges) {
           if (cb < ca) continue;
@@ -144,7 +139,7 @@ StableStep stable_timestep(const Grains& grains, const Scene& scene, DampedMode 
           for (double r2 : {rb.min, rb.max}) {
             const double m2 = grain_mass(r2, b.density);
             consider(p.kn, p.gamma_n, m1 * m2 / (m1 + m2),
-                     "grains R = " + fmt(r1) + " m (species " + std::to_string(a.species) + ") and R = " + fmt(r2) +
+                     "grains R = " + g6(r1) + " m (species " + std::to_string(a.species) + ") and R = " + g6(r2) +
                          " m (species " + std::to_string(b.species) + ")");
           }
         }
@@ -153,8 +148,8 @@ StableStep stable_timestep(const Grains& grains, const Scene& scene, DampedMode 
     s.characteristic_time = best;
     s.damping_factor = verlet;  // the contact time above already includes the damping
     s.step = s.fraction * s.damping_factor * best;
-    s.rule = "contact time pi/sqrt(kn/m_eff - (gamma_n/2)^2) = " + fmt(best) + " s (hooke-stiffness; " + what +
-             ") x " + fmt(s.fraction) + damping_note() + " = " + fmt(s.step) + " s";
+    s.rule = "contact time pi/sqrt(kn/m_eff - (gamma_n/2)^2) = " + g6(best) + " s (hooke-stiffness; " + what +
+             ") x " + g6(s.fraction) + damping_note() + " = " + g6(s.step) + " s";
     return s;
   }
   if (scene.relax.model != "hooke")
@@ -174,7 +169,7 @@ StableStep stable_timestep(const Grains& grains, const Scene& scene, DampedMode 
     const double t = hooke_contact_time(k, m_eff, gamma);
     if (t < best) {
       best = t;
-      what = label + ": k = " + fmt(k) + " N/m, m_eff = " + fmt(m_eff) + " kg, gamma_n = " + fmt(gamma) + " kg/s";
+      what = label + ": k = " + g6(k) + " N/m, m_eff = " + g6(m_eff) + " kg, gamma_n = " + g6(gamma) + " kg/s";
     }
   };
   for (const auto& [ca, ra] : ranges) {
@@ -188,8 +183,8 @@ StableStep stable_timestep(const Grains& grains, const Scene& scene, DampedMode 
         const double t = hooke_contact_time(k, m1, gamma);
         if (t < best) {
           best = t;
-          what = "grain R = " + fmt(r1) + " m of species " + std::to_string(a.species) + " on a wall: k = " + fmt(k) +
-                 " N/m, m_eff = " + fmt(m1) + " kg, gamma_n = " + fmt(gamma) + " kg/s";
+          what = "grain R = " + g6(r1) + " m of species " + std::to_string(a.species) + " on a wall: k = " + g6(k) +
+                 " N/m, m_eff = " + g6(m1) + " kg, gamma_n = " + g6(gamma) + " kg/s";
         }
       }
       for (const auto& [cb, rb] : ranges) {
@@ -198,7 +193,7 @@ StableStep stable_timestep(const Grains& grains, const Scene& scene, DampedMode 
         for (double r2 : {rb.min, rb.max}) {
           const double m2 = grain_mass(r2, b.density);
           consider(r1 * r2 / (r1 + r2), m1 * m2 / (m1 + m2), a.material, b.material,
-                   "grains R = " + fmt(r1) + " m (species " + std::to_string(a.species) + ") and R = " + fmt(r2) +
+                   "grains R = " + g6(r1) + " m (species " + std::to_string(a.species) + ") and R = " + g6(r2) +
                        " m (species " + std::to_string(b.species) + ")");
         }
       }
@@ -207,8 +202,8 @@ StableStep stable_timestep(const Grains& grains, const Scene& scene, DampedMode 
   s.characteristic_time = best;
   s.damping_factor = std::sqrt(1.0 - zeta * zeta) * verlet;
   s.step = s.fraction * s.damping_factor * best;
-  s.rule = "contact time pi/sqrt(k/m_eff - (gamma/2)^2) = " + fmt(best) + " s (Hooke, V = " + fmt(v) + " m/s; " +
-           what + ") x " + fmt(s.fraction) + damping_note() + " = " + fmt(s.step) + " s";
+  s.rule = "contact time pi/sqrt(k/m_eff - (gamma/2)^2) = " + g6(best) + " s (Hooke, V = " + g6(v) + " m/s; " +
+           what + ") x " + g6(s.fraction) + damping_note() + " = " + g6(s.step) + " s";
   return s;
 }
 

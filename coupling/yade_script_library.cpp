@@ -328,22 +328,25 @@ def unbalanced_force():
         return float("inf")
 
 
+def present_grains():
+    """(packing id, body) of every grain still in the simulation (an open floor erases the ones that leave)."""
+    for gid, bid in _grains:
+        b = O.bodies[bid]
+        if b is not None:
+            yield gid, b
+
+
 def remove_escaped():
     """Open floor: erases every grain whose centre left REGION (x0, x1, y0, y1); returns how many."""
     if REGION is None:
         return 0
     x0, x1, y0, y1 = REGION
-    gone = 0
-    for gid, bid in _grains:
-        b = O.bodies[bid]
-        if b is None:
-            continue
-        p = b.state.pos
-        if p[0] < x0 or p[0] > x1 or (DIMENSION == 3 and (p[1] < y0 or p[1] > y1)):
-            O.bodies.erase(bid)
-            _removed.append(gid)
-            gone += 1
-    return gone
+    gone = [(gid, b.id) for gid, b in present_grains()
+            if not (x0 <= b.state.pos[0] <= x1) or (DIMENSION == 3 and not (y0 <= b.state.pos[1] <= y1))]
+    for gid, bid in gone:
+        O.bodies.erase(bid)
+        _removed.append(gid)
+    return len(gone)
 
 
 def grain_positions():
@@ -355,10 +358,7 @@ def bulk_packing_fraction():
     c = COMPACTION
     lo, hi = c["window_lo"], c["window_hi"]
     solid = 0.0
-    for _, bid in _grains:
-        b = O.bodies[bid]
-        if b is None:
-            continue
+    for _, b in present_grains():
         p = b.state.pos
         if not (lo[2] <= p[2] <= hi[2]):
             continue
