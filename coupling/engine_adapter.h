@@ -13,7 +13,8 @@ namespace btr {
 // In-run compaction to a target bulk packing fraction (btr relax --target-phi; relax_target.h), run before
 // the stop rule: friction scaled by friction_scales[k] (k = 0 first; the next one once the bed is at rest,
 // kinetic energy and its mean below rest_kinetic, still below the target), damping `damping`, the packing
-// fraction of the grains centred in the window checked every steps_per_check steps; at the target (or when
+// fraction of the window checked every steps_per_check steps (each grain's exact part between the window's
+// planes, for the grains whose centre lies in its lateral bounds); at the target (or when
 // the last scale is at rest) the scene's friction is restored, every grain is stopped (velocities and spins
 // zeroed), the plan's damping replaces `damping`, and the stop rule runs as without compaction, armed anew.
 struct CompactionPlan {

@@ -1,10 +1,9 @@
 #include "coupling/liggghts_compaction.h"
-#include "coupling/number_text.h"
 
-#include <cstdio>
 #include <sstream>
 
 #include "coupling/liggghts_script.h"
+#include "coupling/number_text.h"
 #include "coupling/relax_target.h"
 
 namespace btr {
@@ -15,14 +14,31 @@ std::string liggghts_compaction_setup(const CompactionPlan& c, int dimension) {
     if (c.slab || (dimension == 2 && axis == 1)) return std::string("INF");
     return g17(lo ? c.window_lo[axis] : c.window_hi[axis]);
   };
-  s << "\n# Compaction to the target packing fraction: the solid fraction of the grains centred in the bulk window\n"
-    << "# (btr measure's window of the starting packing, its top lowered by the compaction to come)\n"
+  const std::string zlo = g17(c.window_lo.z()), zhi = g17(c.window_hi.z());
+  // LIGGGHTS 3.8's atom-style variables have no min/max: min(x, y) = (x + y - |x - y|) / 2, max likewise.
+  auto max = [](const std::string& x, const std::string& y) { return "0.5*(" + x + "+" + y + "+abs(" + x + "-(" + y + ")))"; };
+  auto min = [](const std::string& x, const std::string& y) { return "0.5*(" + x + "+" + y + "-abs(" + x + "-(" + y + ")))"; };
+  s << "\n# Compaction to the target packing fraction: the solid fraction of the bulk window (btr measure's window of\n"
+    << "# the starting packing, its top lowered by the compaction to come): each grain's part between the window's\n"
+    << "# planes, exactly (cap volumes; 2D: disk segments), of the grains whose centre lies in its lateral bounds.\n"
     << "region btr_bulk block " << bound(0, true) << " " << bound(0, false) << " " << bound(1, true) << " "
-    << bound(1, false) << " " << g17(c.window_lo.z()) << " " << g17(c.window_hi.z()) << " units box\n";
-  if (dimension == 3)
-    s << "variable btr_grain_volume atom 4.1887902047863905*c_btr_radius*c_btr_radius*c_btr_radius\n";
-  else
-    s << "variable btr_grain_volume atom 3.1415926535897931*c_btr_radius*c_btr_radius   # 2D: disk areas\n";
+    << bound(1, false) << " INF INF units box\n"
+    // [a, b]: the grain's extent [z - r, z + r] clipped to the window, empty (a = b) where they do not meet
+    << "variable btr_cut_a0 atom " << max(zlo, "z-c_btr_radius") << "\n"
+    << "variable btr_cut_a atom " << min("v_btr_cut_a0", "z+c_btr_radius") << "\n"
+    << "variable btr_cut_b0 atom " << min(zhi, "z+c_btr_radius") << "\n"
+    << "variable btr_cut_b atom " << max("v_btr_cut_b0", "v_btr_cut_a") << "\n";
+  if (dimension == 3) {
+    s << "variable btr_grain_volume atom 3.1415926535897931*(c_btr_radius*c_btr_radius*(v_btr_cut_b-v_btr_cut_a)-"
+         "((v_btr_cut_b-z)^3-(v_btr_cut_a-z)^3)/3.0)\n";
+  } else {  // r^2 [u sqrt(1 - u^2) + asin u] between u = (a - z) / r and (b - z) / r, u kept in [-1, 1]
+    const std::string ua = min(max("(v_btr_cut_a-z)/c_btr_radius", "-1.0"), "1.0");
+    const std::string ub = min(max("(v_btr_cut_b-z)/c_btr_radius", "-1.0"), "1.0");
+    s << "variable btr_cut_ua atom " << ua << "\n"
+      << "variable btr_cut_ub atom " << ub << "\n"
+      << "variable btr_grain_volume atom c_btr_radius*c_btr_radius*(v_btr_cut_ub*sqrt(abs(1.0-v_btr_cut_ub^2))+"
+         "asin(v_btr_cut_ub)-v_btr_cut_ua*sqrt(abs(1.0-v_btr_cut_ua^2))-asin(v_btr_cut_ua))   # 2D: areas\n";
+  }
   s << "compute btr_bulk_volume all reduce/region btr_bulk sum v_btr_grain_volume\n"
     << "variable btr_phi equal c_btr_bulk_volume/" << g17(c.window_measure) << "\n";
   return s.str();

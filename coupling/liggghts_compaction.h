@@ -1,6 +1,7 @@
 #pragma once
 // The LIGGGHTS script's compaction phase (btr relax --target-phi; CompactionPlan in engine_adapter.h says what
-// it does): a region for the bulk window, the packing fraction of the grains centred in it (v_btr_phi), and the
+// it does): a region for the bulk window's lateral bounds, its packing fraction (v_btr_phi: each grain's exact
+// part between the window's planes), and the
 // loop that runs before the stop rule's loop, one block per friction scale.
 #include <string>
 

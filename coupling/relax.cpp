@@ -241,7 +241,7 @@ std::vector<std::string> write_engine_inputs(const Packing& packing, const Scene
               << "): friction x";
     for (double f : plan.compaction.friction_scales) std::cout << " " << g6(f);
     std::cout << ", damping " << g6(plan.compaction.damping) << ", time step " << g6(plan.compaction.timestep)
-              << " s, centres counted in z in ["
+              << " s, window z in ["
               << g6(plan.compaction.window_lo.z()) << ", " << g6(plan.compaction.window_hi.z()) << "] m, every "
               << plan.compaction.steps_per_check << " steps\n";
   }

@@ -119,8 +119,8 @@ nlohmann::json target_phi_record(const CompactionPlan& plan, const RelaxResult& 
                 {"friction_restored_at", result.compaction.time},
                 {"in_run_packing_fraction_at_end", result.compaction.packing_fraction},
                 {"recipe", "in one engine run: friction scaled (friction_scales, the next when the bed came to rest "
-                           "below the target) with compaction_damping until the packing fraction of the grains "
-                           "centred in the bulk window reached the target; then the scene's friction restored, every "
+                           "below the target) with compaction_damping until the packing fraction "
+                           "of the bulk window reached the target; then the scene's friction restored, every "
                            "grain stopped, and the scene's stop rule run with relax.damping"}});
   else
     rec["recipe"] = "the packing already had the target: relaxed without compaction";

@@ -2,7 +2,7 @@
 // Relaxation that lands on a target bulk packing fraction: the friction-reduction recipe YADE users know
 // (REFD-style compaction: friction lowered while the packing fraction is watched, restored once it reaches
 // the target), run inside the one engine run of the relaxation. The engine watches the packing fraction of
-// the grains centred in the bulk window every few steps; the writers (liggghts_script.cpp, yade_script.cpp)
+// the bulk window every few steps; the writers (liggghts_script.cpp, yade_script.cpp)
 // emit the compaction phase from the CompactionPlan made here (engine_adapter.h says what it does).
 //
 // Why in the run and not as separate runs to rest at each friction: the compaction of a BTR bed is a

@@ -353,19 +353,28 @@ def grain_positions():
     return [O.bodies[bid].state.pos if O.bodies[bid] is not None else None for _, bid in _grains]
 
 
+def grain_part_between(z, r, a, b):
+    """Volume (area in 2D) of a sphere (disk) of centre height z and radius r between the planes a and b."""
+    a, b = max(a, z - r), min(b, z + r)
+    if b <= a:
+        return 0.0
+    if DIMENSION == 3:
+        return math.pi * (r * r * (b - a) - ((b - z) ** 3 - (a - z) ** 3) / 3.0)
+    ua, ub = (min(max((u - z) / r, -1.0), 1.0) for u in (a, b))
+    return r * r * (ub * math.sqrt(1.0 - ub * ub) + math.asin(ub) - ua * math.sqrt(1.0 - ua * ua) - math.asin(ua))
+
+
 def bulk_packing_fraction():
-    """Solid fraction (area fraction in 2D) of the grains centred in COMPACTION's window."""
+    """Solid fraction (area fraction in 2D) of COMPACTION's window: each grain's part between its planes, of the
+    grains whose centre lies in its lateral bounds (the LIGGGHTS script's variable btr_phi)."""
     c = COMPACTION
     lo, hi = c["window_lo"], c["window_hi"]
     solid = 0.0
     for _, b in present_grains():
         p = b.state.pos
-        if not (lo[2] <= p[2] <= hi[2]):
-            continue
         if not c["slab"] and not (lo[0] <= p[0] <= hi[0] and (DIMENSION == 2 or lo[1] <= p[1] <= hi[1])):
             continue
-        r = b.shape.radius
-        solid += 4.0 / 3.0 * math.pi * r ** 3 if DIMENSION == 3 else math.pi * r * r
+        solid += grain_part_between(p[2], b.shape.radius, lo[2], hi[2])
     return solid / c["window_measure"]
 
 
@@ -390,6 +399,8 @@ class Compaction:
         """Called at every sample while active; returns True while the compaction goes on."""
         c = COMPACTION
         phi = bulk_packing_fraction()
+        if self.k == 0 and self.samples == 0:
+            log("compaction: first check at t = %.6g s, phi %.6g" % (t, phi))
         self.samples += 1
         self.recent = (self.recent + [e])[-(STEPS_PER_CHECK // AVERAGE_EVERY):]
         if phi >= c["target"]:

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <sstream>
 #include <string>
 
 #include "btr/run_scene.h"
@@ -36,6 +37,29 @@ Bed btr_bed() {
   b.packing.grains = btr::run_scene(b.scene, 3, 400, {}).grains;
   b.packing.meta = {{"scene", btr::scene_to_json(b.scene)}, {"dimension", 3}};
   return b;
+}
+
+// The packing fraction the engine measured at the compaction's first check: LIGGGHTS' first thermo row (its
+// last column is v_btr_phi), YADE's "compaction: first check" line.
+double first_check_phi(const std::string& log, const std::string& engine) {
+  std::istringstream in(log);
+  std::string line;
+  bool header = false;
+  while (std::getline(in, line)) {
+    if (engine == "yade") {
+      const std::size_t at = line.find("compaction: first check at t = ");
+      if (at != std::string::npos) return std::stod(line.substr(line.find(", phi ") + 6));
+    } else if (line.find("Step") != std::string::npos && line.find("btr_phi") != std::string::npos) {
+      header = true;
+    } else if (header) {
+      std::istringstream row(line);
+      std::string word, last;
+      while (row >> word) last = word;
+      return std::stod(last);
+    }
+  }
+  ADD_FAILURE() << "no first compaction check in the log";
+  return 0.0;
 }
 
 btr::RelaxSettings target(double phi, std::vector<double> scales = {0.0}, double damping = 0.1) {
@@ -194,6 +218,13 @@ TEST_P(TargetPhiEngine, UnreachableTargetTriesEveryScaleThenSettles) {
   const std::string log = read(dir + (GetParam() == "liggghts" ? "/log.liggghts" : "/yade.log"));
   EXPECT_NE(log.find(GetParam() == "liggghts" ? "BTR-COMPACTION-REST friction x 0.5" : "friction x 0.5 at rest"),
             std::string::npos);
+  // The engine's packing fraction at its first check (after a few steps, the bed still where BTR left it) is
+  // btr measure's exact one for the window: each grain's cap between the window's planes, computed here.
+  const btr::CompactionPlan c = btr::plan_compaction(b.packing, b.scene, s, 1e-5, 1e-9);
+  ASSERT_TRUE(c.enabled && c.slab);
+  double solid = 0.0;
+  for (const btr::Grain& g : b.packing.grains) solid += btr::grain_volume_in_slab(g, 3, c.window_lo.z(), c.window_hi.z());
+  EXPECT_NEAR(first_check_phi(log, GetParam()), solid / c.window_measure, 1e-3);
   const nlohmann::json meta = nlohmann::json::parse(read(dir + "/relaxed.json"));
   EXPECT_EQ(meta["target_phi"]["reached"], false);
 }
