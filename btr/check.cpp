@@ -246,6 +246,23 @@ Walls walls_of(const Container& c, int dimension, const Vec3& p, double r) {
 
 }  // namespace
 
+MinimumImage::MinimumImage(const Container& c, int dimension)
+    : px(wraps_x(c) && std::isfinite(c.size_x) && c.size_x > 0),
+      py(wraps_y(c, dimension) && std::isfinite(c.size_y) && c.size_y > 0),
+      lx(c.size_x),
+      ly(c.size_y) {}
+
+Vec3 MinimumImage::operator()(Vec3 d) const {
+  auto wrap = [](double& v, double period) {
+    if (std::abs(v) <= 0.5 * period) return;
+    if (std::abs(v) <= 1.5 * period) v -= v > 0 ? period : -period;
+    else v -= period * std::nearbyint(v / period);
+  };
+  if (px) wrap(d.x(), lx);
+  if (py) wrap(d.y(), ly);
+  return d;
+}
+
 CheckReport check_packing(const Grains& grains, int dimension, const Container& container,
                           double overlap_tol, double contact_tol) {
   CheckReport rep;
@@ -273,19 +290,8 @@ CheckReport check_packing(const Grains& grains, int dimension, const Container& 
   }
   if (r_max == 0) return rep;
 
-  // A periodic axis without a positive period (an invalid container) is treated as unbounded.
-  const bool px = wraps_x(container) && std::isfinite(container.size_x) && container.size_x > 0;
-  const bool py = wraps_y(container, dimension) && std::isfinite(container.size_y) && container.size_y > 0;
-  auto wrap = [](double& v, double period) {
-    if (std::abs(v) <= 0.5 * period) return;
-    if (std::abs(v) <= 1.5 * period) v -= v > 0 ? period : -period;
-    else v -= period * std::nearbyint(v / period);
-  };
-  auto min_image = [&](Vec3 d) {
-    if (px) wrap(d.x(), container.size_x);
-    if (py) wrap(d.y(), container.size_y);
-    return d;
-  };
+  const MinimumImage min_image(container, dimension);
+  const bool px = min_image.px, py = min_image.py;
 
   // Size levels: level L holds radii in (r_max / 2^(L+1), r_max / 2^L], in a grid whose cells are
   // one largest diameter of that level wide. A pair is examined once, by the grain of the higher

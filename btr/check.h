@@ -18,6 +18,16 @@ struct CheckReport {
   bool ok() const { return overlaps == 0 && unsupported == 0 && outside == 0; }
 };
 
+// Minimum-image displacement in the container's periodic axes (wraps_x, wraps_y). A periodic axis
+// without a positive period (an invalid container) is treated as unbounded. Shared with the cluster
+// check (btr/cluster_check.cpp).
+struct MinimumImage {
+  MinimumImage(const Container& container, int dimension);
+  Vec3 operator()(Vec3 d) const;
+  bool px, py;  // x, y wrap
+  double lx, ly;  // their periods
+};
+
 // overlap_tol and contact_tol are relative to the smaller radius of the pair.
 CheckReport check_packing(const Grains& grains, int dimension, const Container& container,
                           double overlap_tol = 1e-9, double contact_tol = 1e-7);

@@ -6,6 +6,7 @@
 #include <functional>
 #include <numeric>
 
+#include "btr/check.h"
 #include "btr/cluster.h"
 
 namespace btr {
@@ -105,16 +106,28 @@ ClusterCheckReport check_clusters(const Grains& grains, int dimension, const Con
   for (std::size_t i = 0; i < grains.size(); ++i)
     wall_touches(grains[i], i, dimension, c, overlap_tol, contact_tol, report, touches);
 
-  // Pairs: sweep along x over the grains sorted by x (periodic: also the images one period away).
-  const bool periodic = c.kind == ContainerKind::Periodic;
+  // Pairs, at the minimum image: sweep along x over the grains sorted by x (in a periodic container
+  // wrapped into the cell); pairs across the x boundary lie near the two ends of that order.
+  const MinimumImage image(c, dimension);
   double r_max = 0.0;
   for (const Grain& g : grains) r_max = std::max(r_max, g.r);
+  const double reach = r_max * (2.0 + contact_tol) * (1.0 + 1e-12);
+  std::vector<double> xs(grains.size());
+  for (std::size_t i = 0; i < grains.size(); ++i) xs[i] = image(grains[i].x).x();
   std::vector<std::size_t> order(grains.size());
   std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return grains[a].x.x() < grains[b].x.x(); });
-  auto pair = [&](std::size_t i, std::size_t j, const Vec3& shift) {
-    if (body_of[i] == body_of[j]) return;
-    const Vec3 dx = grains[i].x - (grains[j].x + shift);
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return xs[a] < xs[b]; });
+  const bool wraps = image.px || image.py;
+  std::vector<std::vector<std::size_t>> links(wraps ? grains.size() : 0);  // members of one body within reach
+  auto pair = [&](std::size_t i, std::size_t j) {
+    const Vec3 dx = image(grains[i].x - grains[j].x);
+    if (body_of[i] == body_of[j]) {
+      if (wraps && dx.norm() <= reach) {
+        links[i].push_back(j);
+        links[j].push_back(i);
+      }
+      return;
+    }
     const double rmin = std::min(grains[i].r, grains[j].r);
     const double gap = dx.norm() - grains[i].r - grains[j].r;
     if (gap < -overlap_tol * rmin) {
@@ -126,30 +139,49 @@ ClusterCheckReport check_clusters(const Grains& grains, int dimension, const Con
       touches[j].push_back({j, -dx.normalized()});
     }
   };
-  std::vector<Vec3> shifts{Vec3::Zero()};
-  if (periodic) {
-    for (int sx = -1; sx <= 1; ++sx)
-      for (int sy = (dimension == 3 ? -1 : 0); sy <= (dimension == 3 ? 1 : 0); ++sy)
-        if (sx || sy) shifts.push_back(Vec3(sx * c.size_x, sy * c.size_y, 0.0));
-  }
-  for (std::size_t a = 0; a < order.size(); ++a)
-    for (std::size_t b = a + 1; b < order.size(); ++b) {
-      const std::size_t i = order[a], j = order[b];
-      if (grains[j].x.x() - grains[i].x.x() > 2.0 * r_max) break;
-      pair(i, j, Vec3::Zero());
+  const std::size_t n = order.size();
+  for (std::size_t a = 0; a < n; ++a)
+    for (std::size_t b = a + 1; b < n; ++b) {
+      if (xs[order[b]] - xs[order[a]] > reach) break;
+      pair(order[a], order[b]);
     }
-  if (periodic)  // images: brute force over the grains near the boundaries
-    for (std::size_t i = 0; i < grains.size(); ++i)
-      for (std::size_t j = i + 1; j < grains.size(); ++j)
-        for (std::size_t s = 1; s < shifts.size(); ++s) pair(i, j, shifts[s]);
+  if (image.px)  // the pairs the sweep left out: farther than reach apart in the cell, close across x = +-L/2
+    for (std::size_t a = 0; a < n && xs[order[a]] < -0.5 * c.size_x + reach; ++a)
+      for (std::size_t b = n - 1; b > a && xs[order[b]] > 0.5 * c.size_x - reach; --b)
+        if (xs[order[b]] - xs[order[a]] > reach) pair(order[a], order[b]);
 
   const int d = dimension == 3 ? 6 : 3;
+  // Members are wrapped into the cell one by one in a packing. A body is made one piece again (at[i]) by
+  // a walk over its links, each member taken at the image nearest the member it was reached from: right
+  // for a body of touching members wider than half the cell too. A member no walk reaches starts one at
+  // its image nearest the body's first member (right if it lies within half a period of it).
+  std::vector<Vec3> at(grains.size());
+  std::vector<char> placed(grains.size(), 0);
+  std::vector<std::size_t> walk;
   for (const auto& body : bodies) {
+    const Vec3& ref = grains[body.front()].x;
+    for (std::size_t start : body) {
+      if (placed[start]) continue;
+      at[start] = ref + image(grains[start].x - ref);
+      placed[start] = 1;
+      walk.assign(1, start);
+      while (!walk.empty()) {
+        const std::size_t i = walk.back();
+        walk.pop_back();
+        if (wraps)
+          for (std::size_t j : links[i])
+            if (!placed[j]) {
+              at[j] = at[i] + image(grains[j].x - grains[i].x);
+              placed[j] = 1;
+              walk.push_back(j);
+            }
+      }
+    }
     Vec3 G = Vec3::Zero();
     double m = 0.0, L = 0.0;
     for (std::size_t i : body) {
       const double mi = std::pow(grains[i].r, dimension);
-      G += mi * grains[i].x;
+      G += mi * at[i];
       m += mi;
       L += grains[i].r;
     }
@@ -158,7 +190,7 @@ ClusterCheckReport check_clusters(const Grains& grains, int dimension, const Con
     std::vector<Eigen::VectorXd> wrenches;
     for (std::size_t i : body)
       for (const Touch& t : touches[i]) {
-        const Vec3 torque = (grains[i].x - G).cross(t.normal) / L;
+        const Vec3 torque = (at[i] - G).cross(t.normal) / L;
         Eigen::VectorXd w(d);
         if (d == 6) w << t.normal, torque;
         else w << t.normal.x(), t.normal.z(), torque.y();

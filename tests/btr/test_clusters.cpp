@@ -1,6 +1,7 @@
 // Rigid clusters: hand geometry, invariants of random cluster packings, the independent check.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -263,6 +264,113 @@ TEST(Clusters, DescentDoesNotStopShortOfBalanceWhereASupportUnloads) {
   const ClusterCheckReport rep = check_clusters(grains, 3, c);
   EXPECT_EQ(rep.overlaps, 0) << rep.max_overlap;
   for (std::int64_t id : rep.examples) EXPECT_NE(grains[id - 1].cluster, 1) << "the placed cluster is unsupported";
+}
+
+// A grain at (x, 0, z): in the x-z plane, so in 2D too.
+Grain grain_at(double x, double z, double r, std::int32_t cluster) {
+  Grain g{Vec3(x, 0.0, z), r, 1};
+  g.cluster = cluster;
+  return g;
+}
+
+// Each grain wrapped into the periodic cell [-L/2, L/2) on its own, as in a packing.
+Grains wrapped(Grains g, double L) {
+  for (Grain& x : g) x.x.x() -= L * std::floor(x.x.x() / L + 0.5);
+  return g;
+}
+
+bool flagged(const ClusterCheckReport& rep, std::int64_t id) {
+  return std::find(rep.examples.begin(), rep.examples.end(), id) != rep.examples.end();
+}
+
+// A dimer (radius 0.5) across the boundary x = 3 of a periodic cell 6 wide, in the x-z plane (2D, and
+// 3D at y = 0). Props are single grains on the floor. (1) Flat on the floor: supported. (2) Leaning at
+// 60 degrees, its foot A on the floor against T, its top B against the side of S: the horizontal pushes
+// of T and S balance each other and their torque about A, f s = c / 2 (c, s: cosine and sine of the
+// tilt), is that of the weight, so f = 1 / (2 sqrt 3) >= 0: supported. (3) The same dimer tilted over
+// T (B up-left of A, resting on T with the normal (1/2, sqrt 3 / 2)): every contact except the floor
+// under A pushes towards +x, so only the floor can carry it, and the centre of mass is not above A:
+// unsupported.
+TEST(Clusters, CheckUnwrapsADimerAcrossThePeriodicBoundary) {
+  const double L = 6.0, r = 0.5, c = 0.5, s = std::sqrt(3.0) / 2.0, rS = r + s;
+  const double a = 0.5 * L - 0.25;  // the foot; the centre of mass of (1) and (2) is on the boundary
+  const Grains flat = wrapped({grain_at(a, r, r, 1), grain_at(a + 2 * r, r, r, 1)}, L);
+  const Grains leaning = wrapped({grain_at(a, r, r, 1), grain_at(a + c, r + s, r, 1), grain_at(a - 2 * r, r, r, 0),
+                                  grain_at(a + c + r + rS, rS, rS, 0)},
+                                 L);
+  const double b = -a;  // (3) on the other side of the boundary: A and T touch across it
+  const Grains tilted =
+      wrapped({grain_at(b, r, r, 1), grain_at(b - c, r + s, r, 1), grain_at(b - 2 * r, r, r, 0)}, L);
+  ASSERT_LT(flat[1].x.x(), 0.0);
+  ASSERT_LT(leaning[1].x.x(), 0.0);
+  ASSERT_GT(tilted[1].x.x(), 0.0);
+  ASSERT_GT(tilted[2].x.x(), 0.0);
+  for (int dim : {2, 3}) {
+    const Container cell = dim == 3 ? periodic(L, L) : periodic(L);
+    const ClusterCheckReport one = check_clusters(flat, dim, cell);
+    EXPECT_TRUE(one.ok()) << dim << ": overlaps " << one.overlaps << ", unsupported " << one.unsupported;
+    EXPECT_EQ(one.bodies, 1);
+    const ClusterCheckReport two = check_clusters(leaning, dim, cell);
+    EXPECT_TRUE(two.ok()) << dim << ": overlaps " << two.overlaps << ", unsupported " << two.unsupported;
+    EXPECT_EQ(two.bodies, 3);
+    const ClusterCheckReport three = check_clusters(tilted, dim, cell);
+    EXPECT_EQ(three.overlaps, 0) << dim << ": max " << three.max_overlap;
+    EXPECT_EQ(three.unsupported, 1) << dim;
+    EXPECT_TRUE(flagged(three, 1)) << dim;
+  }
+}
+
+// A rigid chain of 7 touching grains (radius 0.5, 6 diameters long) leaning at 30 degrees in a periodic
+// cell 10 wide, listed from the top: its ends are 5.2 apart in x, more than half a period, so the image
+// of the foot nearest the first member is the wrong one. Foot on the floor against T, top against the
+// top member of a column of 4 grains (one cluster) standing on the floor: supported as the leaning dimer
+// above (f = c / (2 s)), lying inside the cell or across its boundary.
+TEST(Clusters, CheckUnwrapsAClusterWiderThanHalfTheCell) {
+  const double L = 10.0, r = 0.5, c = std::cos(M_PI / 6), s = 0.5;
+  for (double a : {-4.9, 1.0}) {  // the foot: the chain inside the cell, then across x = 5
+    Grains g;
+    for (int k = 6; k >= 0; --k) g.push_back(grain_at(a + 2 * r * k * c, r + 2 * r * k * s, r, 1));
+    for (int k = 0; k < 4; ++k) g.push_back(grain_at(a + 12 * r * c + 2 * r, r + 2 * r * k, r, 2));
+    g.push_back(grain_at(a - 2 * r, r, r, 0));
+    g = wrapped(g, L);
+    EXPECT_EQ(g[0].x.x() < g[6].x.x(), a > 0) << a;  // the top wrapped to the other side
+    for (int dim : {2, 3}) {
+      const ClusterCheckReport rep = check_clusters(g, dim, dim == 3 ? periodic(L, L) : periodic(L));
+      EXPECT_TRUE(rep.ok()) << a << ", " << dim << ": overlaps " << rep.overlaps << ", unsupported "
+                            << rep.unsupported;
+      EXPECT_EQ(rep.bodies, 3);
+    }
+  }
+}
+
+// Random 3D piles in a periodic cell: clusters come to rest across the boundary (members wrapped to
+// opposite sides), and every pile passes the check; such a cluster lifted off its supports does not.
+TEST(Clusters, PeriodicPilesAcrossTheBoundaryPassTheCheck) {
+  const Container c = periodic(6, 6);
+  int failed = 0, across = 0, lifted = 0;
+  for (std::uint64_t seed = 0; seed < 30; ++seed) {
+    const Pile p = random_pile(3, c, 40, seed);
+    for (const auto& body : rigid_bodies(p.grains)) {
+      bool split = false;
+      for (std::size_t i : body) {
+        const Vec3 d = p.grains[i].x - p.grains[body.front()].x;
+        split = split || std::abs(d.x()) > 0.5 * c.size_x || std::abs(d.y()) > 0.5 * c.size_y;
+      }
+      across += split;
+      if (split && lifted++ < 5) {
+        Grains up = p.grains;
+        for (std::size_t i : body) up[i].x.z() += 0.01;
+        EXPECT_TRUE(flagged(check_clusters(up, 3, c), static_cast<std::int64_t>(body.front()) + 1)) << "seed " << seed;
+      }
+    }
+    const ClusterCheckReport rep = check_clusters(p.grains, 3, c);
+    EXPECT_EQ(rep.bodies, 40) << "seed " << seed;
+    if (!rep.ok() && failed++ < 3)
+      ADD_FAILURE() << "seed " << seed << ": overlaps " << rep.overlaps << " (max " << rep.max_overlap
+                    << " r), unsupported " << rep.unsupported;
+  }
+  EXPECT_EQ(failed, 0);
+  EXPECT_GE(across, 100);  // 168 when written: the test does exercise clusters across the boundary
 }
 
 // The independent check catches a cluster lifted off its supports and one pushed into another.
