@@ -4,7 +4,6 @@
 
 #include "coupling/liggghts_script.h"
 #include "coupling/number_text.h"
-#include "coupling/relax_target.h"
 
 namespace btr {
 
@@ -59,7 +58,7 @@ std::string liggghts_compaction_loop(const CompactionPlan& c, const Grains& grai
   for (std::size_t k = 0; k < c.friction_scales.size(); ++k) {
     const std::string scale = g6(c.friction_scales[k]), n = std::to_string(k + 1);
     if (k > 0)
-      s << liggghts_friction_fixes(with_friction_scaled(scene, c.friction_scales[k])) << "run 0 post no\n";
+      s << liggghts_friction_fixes(scene, c.friction_scales[k]) << "run 0 post no\n";
     s << "variable btr_crest equal ${btr_time}+" << g17(arming_time) << "\n"
       << "label btr_compact_" << n << "\n"
       << "variable btr_compact_check_" << n << " loop " << c.max_checks_per_scale << "\n"

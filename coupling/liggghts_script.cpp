@@ -1,7 +1,6 @@
 // Writes the LIGGGHTS inputs: btr.data (read_data, atom_style granular) and in.btr (the script).
 // Syntax checked against the LIGGGHTS 3.8 manual (liggghts-doc) and by running liggghts.
 #include "coupling/liggghts_script.h"
-#include "coupling/number_text.h"
 
 #include <algorithm>
 #include <array>
@@ -13,8 +12,9 @@
 #include <sstream>
 
 #include "coupling/dem_walls.h"
-#include "coupling/materials.h"
 #include "coupling/liggghts_compaction.h"
+#include "coupling/materials.h"
+#include "coupling/number_text.h"
 #include "coupling/relax_plan.h"
 #include "coupling/relax_target.h"
 #include "coupling/text_file.h"
@@ -238,11 +238,11 @@ std::vector<double> liggghts_damping_gamma(const Grains& grains, const Scene& sc
   return gamma;
 }
 
-std::string liggghts_friction_fixes(const Scene& scene) {
-  const TypeTable types = make_types(scene);
+std::string liggghts_friction_fixes(const Scene& scene, double scale) {
+  const TypeTable types = make_types(with_friction_scaled(scene, scale));
   std::string s = "fix btr_friction all property/global coefficientFriction peratomtypepair" +
                   per_type_pair(types, [](const Material& m) { return m.friction; }) + "\n";
-  if (uses_rolling_friction(scene))
+  if (uses_rolling_friction(scene))  // the pair style's rolling model needs the property, even scaled to 0
     s += "fix btr_rolling all property/global coefficientRollingFriction peratomtypepair" +
          per_type_pair(types, [](const Material& m) { return m.rolling_friction; }) + "\n";
   return s;
@@ -371,7 +371,7 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   if (compaction.enabled)
     s << "# Friction scaled by " << g6(compaction.friction_scales.front())
       << " for the compaction to the target packing fraction (restored after it, below).\n"
-      << liggghts_friction_fixes(with_friction_scaled(scene, compaction.friction_scales.front()));
+      << liggghts_friction_fixes(scene, compaction.friction_scales.front());
   else
     s << liggghts_friction_fixes(scene);
   if (stiffness) {

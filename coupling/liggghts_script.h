@@ -44,9 +44,10 @@ LiggghtsSchedule liggghts_schedule(const Grains& grains, const Scene& scene, con
 // gamma = 2 (damping / pi) sqrt(k m).
 std::vector<double> liggghts_damping_gamma(const Grains& grains, const Scene& scene, double damping);
 
-// The fix property/global lines of the scene's friction (and rolling friction, if any) per type pair, in this
-// writer's type order; re-issued with with_friction_scaled(scene, s) they change the friction between runs.
-std::string liggghts_friction_fixes(const Scene& scene);
+// The fix property/global lines of the scene's friction (and rolling friction, if the scene has any) per type
+// pair, in this writer's type order, every coefficient times `scale`; re-issued between runs they change the
+// friction.
+std::string liggghts_friction_fixes(const Scene& scene, double scale = 1.0);
 
 // "fix ID all viscous ..." (with its comment): the damping `damping` as liggghts_damping_gamma computes it.
 std::string liggghts_viscous_fix(const std::string& id, const Grains& grains, const Scene& scene, double damping);

@@ -1,7 +1,6 @@
 // DEM relaxation, engine-independent part: plan (time step, overlap, stop threshold), inputs, run,
 // checks of the result, output files. The engines live behind EngineAdapter.
 #include "coupling/relax.h"
-#include "coupling/number_text.h"
 
 #include <stdexcept>
 #include <algorithm>
@@ -15,6 +14,7 @@
 #include "coupling/engine_adapter.h"
 #include "coupling/force_io.h"
 #include "coupling/materials.h"
+#include "coupling/number_text.h"
 #include "coupling/overlap.h"
 #include "coupling/preload.h"
 #include "coupling/process.h"
@@ -207,6 +207,10 @@ RelaxPlan make_plan(const Packing& packing, const Scene& scene, const RelaxSetti
   if (!(damping >= 0.0 && damping < 1.0)) throw RelaxRefused("damping must be in [0, 1), got " + g6(damping));
   plan.damping = damping;
   plan.compaction = plan_compaction(packing, scene, settings, plan.timestep, plan.kinetic_threshold);
+  if (plan.compaction.enabled && engine == "yade" && uses_rolling_friction(scene))
+    throw RelaxRefused("target packing fraction: YADE's Hertz-Mindlin moment law takes its rolling friction once, for "
+                       "every contact, and the compaction cannot scale it with the sliding friction; relax with "
+                       "LIGGGHTS, or without rolling friction");
   if (scene.container.kind == ContainerKind::Open) {
     // The region: the packing's footprint (grain extents) grown by open_margin largest diameters.
     plan.has_region = true;

@@ -1,5 +1,4 @@
 #include "coupling/relax_target.h"
-#include "coupling/number_text.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,6 +6,7 @@
 #include <limits>
 #include <string>
 
+#include "coupling/number_text.h"
 #include "coupling/relax_plan.h"
 
 namespace btr {

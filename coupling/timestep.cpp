@@ -1,5 +1,4 @@
 #include "coupling/timestep.h"
-#include "coupling/number_text.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,6 +8,7 @@
 #include <stdexcept>
 
 #include "coupling/materials.h"
+#include "coupling/number_text.h"
 
 namespace btr {
 

@@ -165,6 +165,25 @@ TEST(TargetPhi, LiggghtsScriptRunsTheCompactionBeforeTheStopRule) {
   EXPECT_LT(slow, loop);
 }
 
+// YADE's moment law has one rolling friction for every contact: a compaction there is refused before any input
+// is written, naming the reason; LIGGGHTS scales it with the sliding friction.
+TEST(TargetPhi, YadeRefusesTheCompactionWithRollingFriction) {
+  Bed b = btr_bed();
+  b.scene.grains.components[0].material.rolling_friction = 0.1;
+  const std::string dir = btr_test::fresh_dir("target_rolling");
+  try {
+    btr::export_inputs(b.packing, b.scene, "yade", target(0.7), dir + "/yade");
+    ADD_FAILURE() << "not refused";
+  } catch (const btr::RelaxRefused& e) {
+    EXPECT_NE(std::string(e.what()).find("rolling friction"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir + "/yade/relax_yade.py"));
+  btr::export_inputs(b.packing, b.scene, "liggghts", target(0.7), dir + "/liggghts");
+  const std::string in = read(dir + "/liggghts/in.btr");
+  EXPECT_NE(in.find("coefficientRollingFriction peratomtypepair 2 0 0 0 0"), std::string::npos) << in;
+  EXPECT_NE(in.find("coefficientRollingFriction peratomtypepair 2 0.10000000000000001"), std::string::npos) << in;
+}
+
 class TargetPhiEngine : public ::testing::TestWithParam<std::string> {
  protected:
   void SetUp() override {
