@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <numeric>
 #include <unordered_map>
 #include <utility>
 
@@ -261,6 +262,29 @@ Vec3 MinimumImage::operator()(Vec3 d) const {
   if (px) wrap(d.x(), lx);
   if (py) wrap(d.y(), ly);
   return d;
+}
+
+void for_each_pair_within(const std::vector<Vec3>& x, double reach, const MinimumImage& image,
+                          const std::function<void(std::size_t, std::size_t, const Vec3&)>& f) {
+  const std::size_t n = x.size();
+  std::vector<double> xs(n);
+  for (std::size_t i = 0; i < n; ++i) xs[i] = image(x[i]).x();
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return xs[a] < xs[b]; });
+  auto pair = [&](std::size_t i, std::size_t j) {
+    const Vec3 d = image(x[i] - x[j]);
+    if (d.norm() <= reach) f(i, j, d);
+  };
+  for (std::size_t a = 0; a < n; ++a)
+    for (std::size_t b = a + 1; b < n; ++b) {
+      if (xs[order[b]] - xs[order[a]] > reach) break;
+      pair(order[a], order[b]);
+    }
+  if (image.px)  // the pairs the sweep left out: farther than reach apart in the cell, close across x = +-L/2
+    for (std::size_t a = 0; a < n && xs[order[a]] < -0.5 * image.lx + reach; ++a)
+      for (std::size_t b = n - 1; b > a && xs[order[b]] > 0.5 * image.lx - reach; --b)
+        if (xs[order[b]] - xs[order[a]] > reach) pair(order[a], order[b]);
 }
 
 CheckReport check_packing(const Grains& grains, int dimension, const Container& container,

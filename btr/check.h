@@ -2,6 +2,7 @@
 // Self-check of a packing, written independently of the placement code: overlaps, grains not
 // supported (gravity not balanced by non-negative contact forces), grains outside the container.
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "btr/container.h"
@@ -20,13 +21,19 @@ struct CheckReport {
 
 // Minimum-image displacement in the container's periodic axes (wraps_x, wraps_y). A periodic axis
 // without a positive period (an invalid container) is treated as unbounded. Shared with the cluster
-// check (btr/cluster_check.cpp).
+// check (btr/cluster_check.cpp) and the clusters' unwrapping (btr/cluster_unwrap.cpp).
 struct MinimumImage {
   MinimumImage(const Container& container, int dimension);
   Vec3 operator()(Vec3 d) const;
   bool px, py;  // x, y wrap
   double lx, ly;  // their periods
 };
+
+// Calls f(i, j, d) once for every pair i != j of the points x within `reach` of each other, d = image(x[i] - x[j]):
+// a sweep along x over the points sorted by x (wrapped into the cell); pairs across the x boundary lie near
+// the two ends of that order. Shared by the cluster check and the clusters' unwrapping (btr/cluster_unwrap.h).
+void for_each_pair_within(const std::vector<Vec3>& x, double reach, const MinimumImage& image,
+                          const std::function<void(std::size_t, std::size_t, const Vec3&)>& f);
 
 // overlap_tol and contact_tol are relative to the smaller radius of the pair.
 CheckReport check_packing(const Grains& grains, int dimension, const Container& container,

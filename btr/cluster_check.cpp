@@ -4,10 +4,10 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
-#include <numeric>
 
 #include "btr/check.h"
 #include "btr/cluster.h"
+#include "btr/cluster_unwrap.h"
 
 namespace btr {
 namespace {
@@ -106,28 +106,15 @@ ClusterCheckReport check_clusters(const Grains& grains, int dimension, const Con
   for (std::size_t i = 0; i < grains.size(); ++i)
     wall_touches(grains[i], i, dimension, c, overlap_tol, contact_tol, report, touches);
 
-  // Pairs, at the minimum image: sweep along x over the grains sorted by x (in a periodic container
-  // wrapped into the cell); pairs across the x boundary lie near the two ends of that order.
+  // Pairs of grains of different bodies, at the minimum image.
   const MinimumImage image(c, dimension);
   double r_max = 0.0;
   for (const Grain& g : grains) r_max = std::max(r_max, g.r);
   const double reach = r_max * (2.0 + contact_tol) * (1.0 + 1e-12);
-  std::vector<double> xs(grains.size());
-  for (std::size_t i = 0; i < grains.size(); ++i) xs[i] = image(grains[i].x).x();
-  std::vector<std::size_t> order(grains.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return xs[a] < xs[b]; });
-  const bool wraps = image.px || image.py;
-  std::vector<std::vector<std::size_t>> links(wraps ? grains.size() : 0);  // members of one body within reach
-  auto pair = [&](std::size_t i, std::size_t j) {
-    const Vec3 dx = image(grains[i].x - grains[j].x);
-    if (body_of[i] == body_of[j]) {
-      if (wraps && dx.norm() <= reach) {
-        links[i].push_back(j);
-        links[j].push_back(i);
-      }
-      return;
-    }
+  std::vector<Vec3> x(grains.size());
+  for (std::size_t i = 0; i < grains.size(); ++i) x[i] = grains[i].x;
+  for_each_pair_within(x, reach, image, [&](std::size_t i, std::size_t j, const Vec3& dx) {
+    if (body_of[i] == body_of[j]) return;
     const double rmin = std::min(grains[i].r, grains[j].r);
     const double gap = dx.norm() - grains[i].r - grains[j].r;
     if (gap < -overlap_tol * rmin) {
@@ -138,45 +125,13 @@ ClusterCheckReport check_clusters(const Grains& grains, int dimension, const Con
       touches[i].push_back({i, dx.normalized()});
       touches[j].push_back({j, -dx.normalized()});
     }
-  };
-  const std::size_t n = order.size();
-  for (std::size_t a = 0; a < n; ++a)
-    for (std::size_t b = a + 1; b < n; ++b) {
-      if (xs[order[b]] - xs[order[a]] > reach) break;
-      pair(order[a], order[b]);
-    }
-  if (image.px)  // the pairs the sweep left out: farther than reach apart in the cell, close across x = +-L/2
-    for (std::size_t a = 0; a < n && xs[order[a]] < -0.5 * c.size_x + reach; ++a)
-      for (std::size_t b = n - 1; b > a && xs[order[b]] > 0.5 * c.size_x - reach; --b)
-        if (xs[order[b]] - xs[order[a]] > reach) pair(order[a], order[b]);
+  });
 
   const int d = dimension == 3 ? 6 : 3;
-  // Members are wrapped into the cell one by one in a packing. A body is made one piece again (at[i]) by
-  // a walk over its links, each member taken at the image nearest the member it was reached from: right
-  // for a body of touching members wider than half the cell too. A member no walk reaches starts one at
-  // its image nearest the body's first member (right if it lies within half a period of it).
-  std::vector<Vec3> at(grains.size());
-  std::vector<char> placed(grains.size(), 0);
-  std::vector<std::size_t> walk;
+  // Centres of mass and lever arms of bodies made one piece again: members are wrapped into the cell one
+  // by one in a packing. The unwrapping is geometry shared with the DEM export, not placement code.
+  const std::vector<Vec3> at = unwrap_clusters(grains, dimension, c);
   for (const auto& body : bodies) {
-    const Vec3& ref = grains[body.front()].x;
-    for (std::size_t start : body) {
-      if (placed[start]) continue;
-      at[start] = ref + image(grains[start].x - ref);
-      placed[start] = 1;
-      walk.assign(1, start);
-      while (!walk.empty()) {
-        const std::size_t i = walk.back();
-        walk.pop_back();
-        if (wraps)
-          for (std::size_t j : links[i])
-            if (!placed[j]) {
-              at[j] = at[i] + image(grains[j].x - grains[i].x);
-              placed[j] = 1;
-              walk.push_back(j);
-            }
-      }
-    }
     Vec3 G = Vec3::Zero();
     double m = 0.0, L = 0.0;
     for (std::size_t i : body) {

@@ -11,6 +11,7 @@
 #include <map>
 #include <sstream>
 
+#include "btr/cluster_unwrap.h"
 #include "coupling/dem_walls.h"
 #include "coupling/liggghts_compaction.h"
 #include "coupling/materials.h"
@@ -157,20 +158,17 @@ bool has_clusters(const Grains& grains) {
   return std::any_of(grains.begin(), grains.end(), [](const Grain& g) { return g.cluster != 0; });
 }
 
-// Image flags that put every member of a cluster at the periodic image nearest its first member: the
+// Image flags that put every member of a cluster at its unwrapped position (btr/cluster_unwrap.h): the
 // packing wraps members into the cell one by one, fix rigid unwraps them with these flags.
-std::vector<std::array<int, 3>> cluster_images(const Grains& grains, const Container& c) {
+std::vector<std::array<int, 3>> cluster_images(const Grains& grains, const Scene& scene) {
+  const std::vector<Vec3> unwrapped = unwrap_clusters(grains, scene.dimension, scene.container);
+  const double period[2] = {scene.container.size_x, scene.container.size_y};
   std::vector<std::array<int, 3>> image(grains.size(), {0, 0, 0});
-  if (c.kind != ContainerKind::Periodic) return image;
-  std::map<std::int32_t, std::size_t> first;
-  for (std::size_t i = 0; i < grains.size(); ++i) {
-    if (grains[i].cluster == 0) continue;
-    const auto [it, inserted] = first.emplace(grains[i].cluster, i);
-    if (inserted) continue;
-    const Vec3 d = grains[i].x - grains[it->second].x;
-    image[i][0] = -static_cast<int>(std::lround(d.x() / c.size_x));
-    if (c.size_y > 0) image[i][1] = -static_cast<int>(std::lround(d.y() / c.size_y));
-  }
+  for (std::size_t i = 0; i < grains.size(); ++i)
+    for (int a = 0; a < 2; ++a) {
+      const double shift = unwrapped[i][a] - grains[i].x[a];
+      if (shift != 0.0) image[i][a] = static_cast<int>(std::lround(shift / period[a]));
+    }
   return image;
 }
 
@@ -184,7 +182,7 @@ std::string data_file(const Packing& packing, const Scene& scene, const Simulati
   static const char* names[] = {"xlo xhi", "ylo yhi", "zlo zhi"};
   for (int a = 0; a < 3; ++a) out << g17(box.lo[a]) << " " << g17(box.hi[a]) << " " << names[a] << "\n";
   out << "\nAtoms\n\n";
-  const auto image = clusters ? cluster_images(packing.grains, scene.container) : std::vector<std::array<int, 3>>{};
+  const auto image = clusters ? cluster_images(packing.grains, scene) : std::vector<std::array<int, 3>>{};
   // fix rigid refuses a body of one atom: a cluster of one grain is a free grain (molecule 0).
   std::map<std::int32_t, int> size;
   for (const Grain& g : packing.grains) ++size[g.cluster];

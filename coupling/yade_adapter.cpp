@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "btr/cluster_unwrap.h"
 #include "coupling/text_file.h"
 #include "coupling/yade_script.h"
 
@@ -19,14 +20,17 @@ namespace {
 namespace fs = std::filesystem;
 
 // The packing for the script: id,x,y,z,radius,species, and a cluster column (0 = a free grain) when the
-// packing has rigid clusters, which the script makes clumps.
-std::string packing_csv(const Packing& packing) {
+// packing has rigid clusters, which the script makes clumps. A clump needs its members together: in a
+// periodic cell they are written at their unwrapped positions (btr/cluster_unwrap.h), which may lie outside
+// the cell; the script wraps the relaxed positions into the cell again.
+std::string packing_csv(const Packing& packing, const Scene& scene) {
   const bool clusters = std::any_of(packing.grains.begin(), packing.grains.end(), [](const Grain& g) { return g.cluster != 0; });
+  const std::vector<Vec3> x = unwrap_clusters(packing.grains, scene.dimension, scene.container);
   std::string out = clusters ? "id,x,y,z,radius,species,cluster\n" : "id,x,y,z,radius,species\n";
   char line[288];
   for (std::size_t i = 0; i < packing.grains.size(); ++i) {
     const Grain& g = packing.grains[i];
-    int n = std::snprintf(line, sizeof line, "%zu,%.17g,%.17g,%.17g,%.17g,%d", i + 1, g.x.x(), g.x.y(), g.x.z(), g.r,
+    int n = std::snprintf(line, sizeof line, "%zu,%.17g,%.17g,%.17g,%.17g,%d", i + 1, x[i].x(), x[i].y(), x[i].z(), g.r,
                           g.species);
     if (clusters) n += std::snprintf(line + n, sizeof line - n, ",%d", static_cast<int>(g.cluster));
     out.append(line, static_cast<std::size_t>(n));
@@ -45,7 +49,7 @@ class YadeAdapter : public EngineAdapter {
     // Outputs of an earlier run in the same folder must not be read as this run's.
     for (const char* name : {yade_files::kStatus, yade_files::kFinal, yade_files::kKinetic, yade_files::kContacts})
       fs::remove(d / name);
-    write_text_file((d / yade_files::kPacking).string(), packing_csv(packing));
+    write_text_file((d / yade_files::kPacking).string(), packing_csv(packing, scene));
     write_text_file((d / yade_files::kScript).string(), script);
     fs::permissions(d / yade_files::kScript, fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec,
                     fs::perm_options::add);

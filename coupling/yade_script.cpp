@@ -187,7 +187,8 @@ const char* kHeader = R"(#
 #       e.g. on a cluster; the launcher also opens a TCP Python console (port 9000+) and an XML-RPC
 #       server (port 21000+).
 # Input: yade_packing.csv (id,x,y,z,radius,species[,cluster]; the grains of a cluster > 0 form one clump,
-# a rigid body, O.bodies.appendClumped). Outputs: yade_final.csv (id,x,y,z,vx,vy,vz; clump members too),
+# a rigid body, O.bodies.appendClumped; in a periodic cell a cluster's members are unwrapped, together across
+# the boundary). Outputs: yade_final.csv (id,x,y,z,vx,vy,vz; clump members too; wrapped into a periodic cell),
 # yade_kinetic.csv (time,kinetic_energy), yade_contacts.csv (i,j,fn,overlap; j = 0 for a wall), yade.log,
 # and, written last, yade_status.json (status "ok" or "failed", stop reason, time, steps, message).
 #

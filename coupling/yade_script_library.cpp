@@ -118,7 +118,9 @@ def periodic_cell(lx, ly, lz):
 def add_grains(csv_name):
     """The grains of the packing: id,x,y,z,radius,species[,cluster]. Grains of one cluster (cluster > 0) become
     one clump (O.bodies.appendClumped): a rigid body whose members keep their relative positions; YADE makes
-    no contact between members of one clump. Every grain keeps its packing id (_grains maps it to its body)."""
+    no contact between members of one clump. In a periodic cell btr writes a cluster's members unwrapped
+    (together, possibly outside the cell); write_outputs wraps every grain into the cell again. Every grain
+    keeps its packing id (_grains maps it to its body)."""
     free = []      # (packing id, body)
     clusters = {}  # cluster -> [(packing id, body)]
     with open(path(csv_name)) as f:
@@ -162,14 +164,6 @@ def add_grains(csv_name):
             O.bodies[bid].state.blockedDOFs = "yXZ"
     for cluster in sorted(clusters):
         members = clusters[cluster]
-        if _cell is not None:
-            # The packing wraps every member into the cell on its own; a clump needs its members together:
-            # each at the periodic image nearest the first member.
-            ref = members[0][1].state.pos
-            for _, b in members[1:]:
-                p = b.state.pos
-                b.state.pos = (p[0] - _cell[0] * round((p[0] - ref[0]) / _cell[0]),
-                               p[1] - _cell[1] * round((p[1] - ref[1]) / _cell[1]) if DIMENSION == 3 else p[1], p[2])
         clump, member_ids = O.bodies.appendClumped([b for _, b in members])
         _clumps.append(clump)
         if DIMENSION == 2:

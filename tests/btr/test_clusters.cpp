@@ -12,6 +12,7 @@
 #include "btr/cluster.h"
 #include "btr/cluster_check.h"
 #include "btr/cluster_placement.h"
+#include "btr/cluster_unwrap.h"
 #include "btr/deposition.h"
 #include "btr/neighbour_grid.h"
 
@@ -340,6 +341,29 @@ TEST(Clusters, CheckUnwrapsAClusterWiderThanHalfTheCell) {
                             << rep.unsupported;
       EXPECT_EQ(rep.bodies, 3);
     }
+  }
+}
+
+// The unwrapping the check and the DEM export share: the chain above across x = 5 (wider than half the cell,
+// listed from the top) and a free grain, wrapped. Every member comes back where it was before wrapping,
+// give or take one shift by a whole period for the whole cluster; the first member and the free grain keep
+// their wrapped positions; a box changes nothing.
+TEST(Clusters, UnwrapBringsAClusterWiderThanHalfTheCellTogether) {
+  const double L = 10.0, r = 0.5, c = std::cos(M_PI / 6), s = 0.5, a = 1.0;
+  Grains g;
+  for (int k = 6; k >= 0; --k) g.push_back(grain_at(a + 2 * r * k * c, r + 2 * r * k * s, r, 1));
+  g.push_back(grain_at(a - 2 * r, r, r, 0));
+  const Grains w = wrapped(g, L);
+  for (int dim : {2, 3}) {
+    const std::vector<Vec3> at = unwrap_clusters(w, dim, dim == 3 ? periodic(L, L) : periodic(L));
+    ASSERT_EQ(at.size(), g.size());
+    EXPECT_EQ(at[0], w[0].x) << dim;
+    EXPECT_EQ(at[7], w[7].x) << dim;
+    const Vec3 shift = at[0] - g[0].x;
+    EXPECT_NEAR(std::abs(shift.x()), L, 1e-12) << dim;  // the top member wrapped to the other side
+    for (int k = 1; k < 7; ++k) EXPECT_LT((at[k] - g[k].x - shift).norm(), 1e-12) << dim << ", member " << k;
+    const std::vector<Vec3> in_box = unwrap_clusters(w, dim, dim == 3 ? box(L, L) : box(L));
+    for (std::size_t i = 0; i < w.size(); ++i) EXPECT_EQ(in_box[i], w[i].x) << dim << ", grain " << i;
   }
 }
 

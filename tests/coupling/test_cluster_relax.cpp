@@ -113,6 +113,75 @@ TEST_P(ClusterRelax, ClustersRelaxAsRigidBodies) {
   }
 }
 
+// A cluster wider than half a periodic cell: a zig-zag chain of 7 touching grains (r = 1 mm, bonds at 120
+// degrees, ends 10.4 r apart) across the corner of a 3D cell 14 r x 14 r, listed from its low end, its
+// plane tilted by 15 degrees about y so that it falls and turns to lie flat on the floor; three free grains
+// rest on the floor away from it. The packing wraps each member into the cell on its own: the last two
+// members lie more than half a period (in x) from the first, so putting every member at the image nearest
+// the first member breaks the body, and its members' distances change as it turns.
+TEST_P(ClusterRelax, AClusterWiderThanHalfThePeriodicCellStaysInOnePiece) {
+  const std::string engine = GetParam();
+  if (!btr_test::have_engine(engine)) GTEST_SKIP() << engine << " not installed";
+  const double r = 1e-3, L = 14 * r, tilt = M_PI / 12, bond = 2 * r * std::cos(M_PI / 6);
+  btr::Scene scene = btr_test::make_scene("wide_cluster", 3, btr_test::container(btr::ContainerKind::Periodic, L, L));
+  scene.grains.components[0].material.young = 1e7;  // a longer stable step: a short test
+  btr::Packing in;
+  auto wrap = [&](double v) { return v - L * std::floor(v / L + 0.5); };
+  for (int k = 0; k < 7; ++k) {
+    const double along = (k - 3) * bond;  // the middle member at the corner
+    btr::Grain g{btr::Vec3(wrap(0.5 * L + along * std::cos(tilt)), wrap(0.5 * L + (k % 2 - 0.5) * r),
+                           1.05 * r + (along + 3 * bond) * std::sin(tilt)),
+                 r, 1};
+    g.cluster = 1;
+    in.grains.push_back(g);
+  }
+  for (int k = 0; k < 3; ++k) {
+    const double rk = (0.9 + 0.1 * k) * r;
+    in.grains.push_back(btr::Grain{btr::Vec3((k - 1) * 4 * r, 0, rk), rk, 1});
+  }
+  in.meta = {{"scene", btr::scene_to_json(scene)}, {"dimension", 3}};
+  ASSERT_GT(6 * bond * std::cos(tilt), 0.5 * L);  // the ends' x distance: wider than half the cell
+  ASSERT_GT(std::abs(in.grains[1].x.y() - in.grains[0].x.y()), 0.5 * L);  // wrapped apart in y too
+
+  const std::string dir = btr_test::fresh_dir(engine + "_wide_cluster");
+  const btr::RelaxResult result = btr::relax(in, scene, engine, {}, dir);
+  EXPECT_EQ(result.stop_reason, "kinetic-energy");
+  const btr::Grains& out = result.relaxed.grains;
+  ASSERT_EQ(out.size(), in.grains.size());
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    EXPECT_EQ(out[i].cluster, in.grains[i].cluster) << "grain " << i + 1;
+    EXPECT_LE(std::max(std::abs(out[i].x.x()), std::abs(out[i].x.y())), 0.5 * L) << "grain " << i + 1 << " outside";
+  }
+  // Every distance between two members, the members unwrapped along the chain (consecutive members touch,
+  // their nearest images are their own; the chain's ends are not, and their minimum-image distance changes
+  // as the chain turns).
+  auto unwrapped = [&](const btr::Grains& g) {
+    std::vector<btr::Vec3> u{g[0].x};
+    for (std::size_t k = 1; k < 7; ++k) {
+      btr::Vec3 d = g[k].x - g[k - 1].x;
+      d.x() -= L * std::round(d.x() / L);
+      d.y() -= L * std::round(d.y() / L);
+      u.push_back(u.back() + d);
+    }
+    return u;
+  };
+  const std::vector<btr::Vec3> before = unwrapped(in.grains), after = unwrapped(out);
+  double worst = 0.0;
+  for (std::size_t a = 0; a < 7; ++a)
+    for (std::size_t b = a + 1; b < 7; ++b)
+      worst = std::max(worst, std::abs((after[a] - after[b]).norm() - (before[a] - before[b]).norm()));
+  EXPECT_LT(worst, 1e-9 * 0.9 * r);
+  // The chain turned (its high end fell by more than 2 r) and lies flat on the floor in one piece.
+  EXPECT_GT(in.grains[6].x.z() - out[6].x.z(), 2 * r);
+  for (std::size_t k = 0; k < 7; ++k) EXPECT_NEAR(out[k].x.z(), r, 0.01 * r) << "member " << k + 1;
+  for (const auto& c : result.contacts)
+    EXPECT_FALSE(c.j != 0 && c.i <= 7 && c.j <= 7) << "contact " << c.i << "-" << c.j << " inside the cluster";
+  if (engine == "yade") {
+    const auto status = nlohmann::json::parse(btr_test::read_text(dir + "/" + btr::yade_files::kStatus));
+    EXPECT_EQ(status["clumps"], 1);
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Engines, ClusterRelax, ::testing::Values("liggghts", "yade"));
 
 TEST(ClusterRelax, WhatCannotKeepAClusterRigidIsRefused) {
