@@ -113,8 +113,9 @@ def main(argv=None) -> int:
                    help="target of the target-phi method: 'pour' (the reference pours' mean) or a number")
     e.add_argument("--friction-scales", type=floats,
                    help="target-phi methods: friction scales of the compaction, tried in turn (default btr relax's, 0)")
-    e.add_argument("--compaction-damping", type=float,
-                   help="target-phi methods: damping during the compaction (default btr relax's, 0.15)")
+    e.add_argument("--compaction-damping", type=floats,
+                   help="target-phi methods: damping during the compaction (default btr relax's, 0.15); a list "
+                        "such as 0.1,0.15 runs each target-phi method once per value")
     e.add_argument("--compaction-timestep-fraction", type=float,
                    help="target-phi methods: time step of the compaction as a fraction of the Rayleigh / contact "
                         "time (default: the scene's timestep_fraction, the settle's)")

@@ -148,3 +148,16 @@ def test_size_study_new_methods_failed_count_and_reused_pours(tmp_path, btr_bina
     assert again["reference"]["wall_seconds"] == res["reference"]["wall_seconds"]
     assert again["reference"]["cpu_seconds"] == res["reference"]["cpu_seconds"]
 
+
+    # a list of compaction dampings runs the target-phi method once per value, each in its own folder
+    both = error_runtime.run_error_vs_runtime(scene, out / "n150", count=150, relax_times=[], pour_variants=[],
+                                              margin=2.0, progress=lambda m: None, methods=("target-phi-unbalanced",),
+                                              reuse_pours=True, compaction_damping=[0.1, 0.3])
+    rows = [r for r in both["rows"] if r["kind"] == "target-ub"]
+    assert [r["compaction_damping"] for r in rows] == [0.1, 0.3] and len({r["method"] for r in rows}) == 2
+    for r in rows:
+        assert r["status"] == "ok", r
+        relaxed = json.loads((out / "n150" / f"relax_target_phi_unbalanced_cd{r['compaction_damping']:g}"
+                              / "relaxed.json").read_text())
+        if relaxed["target_phi"]["compaction_ran"]:
+            assert relaxed["target_phi"]["compaction_damping"] == r["compaction_damping"]

@@ -103,7 +103,7 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
                          count: int | None = None, relax_times=None, pour_variants=None, ranks: int = 1,
                          margin: float | None = None, progress=print, methods=METHODS, damping: float = 0.5,
                          target_phi="pour", shakes: int = 10, reuse_pours: bool = False,
-                         friction_scales=None, compaction_damping: float | None = None,
+                         friction_scales=None, compaction_damping=None,
                          compaction_timestep_fraction: float | None = None) -> dict:
     if ref_seeds < 3:
         raise StepFailed(f"error-vs-runtime: --ref-seeds: expected at least 3 (the seed-to-seed spread is the "
@@ -196,6 +196,31 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
                    errors=errors_of(m, mean, names), path=r["csv"], stdout=r["stdout"][-600:])
         return r
 
+    target = mean["packing_fraction"] if target_phi == "pour" else float(target_phi)
+
+    def target_methods(cd, name_by_damping):
+        """The target-phi methods (kinetic and unbalanced-force rule) with compaction damping cd (None: btr's)."""
+        scales = "" if friction_scales is None else ",".join(f"{x:g}" for x in friction_scales)
+        target_args = (["--target-phi", repr(float(target)), "--damping", repr(float(damping))] +
+                       (["--friction-scales", scales] if scales else []) +
+                       (["--compaction-damping", repr(float(cd))] if cd is not None else []) +
+                       (["--compaction-timestep-fraction", repr(float(compaction_timestep_fraction))]
+                        if compaction_timestep_fraction is not None else []) +
+                       (["--target-margin", repr(float(margin))] if margin is not None else []))
+        settings_label = (f" friction scales {scales}" if scales else "") + \
+            (f" compaction damping {cd:g}" if cd is not None else "") + \
+            (f" compaction step fraction {compaction_timestep_fraction:g}"
+             if compaction_timestep_fraction is not None else "")
+        for kind, rule in (("target-phi", None), ("target-phi-unbalanced", "unbalanced-force")):
+            if kind not in methods:
+                continue
+            folder = "relax_" + kind.replace("-", "_") + (f"_cd{cd:g}" if name_by_damping else "")
+            with method(f"BTR + {engine} target phi {target:.4g} damped {damping:g}{settings_label}" +
+                        (f" ({rule} rule)" if rule else ""), "target" if rule is None else "target-ub",
+                        wall_seconds=None, target_phi=target, compaction_damping=cd) as row:
+                r = relax_row(row, folder, dep["csv"], target_args + (["--stop-rule", rule] if rule else []), dep)
+                row["target_phi_record"] = read_json(Path(r["csv"]).with_suffix(".json")).get("target_phi")
+
     for t in (relax_times if "relax" in methods else []):
         with method(f"BTR + {engine} relax {t:.3g} s", "relax", wall_seconds=None) as row:
             d = outdir / f"relax_{t:.3g}s"
@@ -205,26 +230,10 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
     if "damped" in methods:
         with method(f"BTR + {engine} relax damped {damping:g}", "damped", wall_seconds=None) as row:
             relax_row(row, f"relax_damped{damping:g}", dep["csv"], ["--damping", repr(float(damping))], dep)
-    target = mean["packing_fraction"] if target_phi == "pour" else float(target_phi)
-    scales = "" if friction_scales is None else ",".join(f"{x:g}" for x in friction_scales)
-    target_args = (["--target-phi", repr(float(target)), "--damping", repr(float(damping))] +
-                   (["--friction-scales", scales] if scales else []) +
-                   (["--compaction-damping", repr(float(compaction_damping))] if compaction_damping is not None else []) +
-                   (["--compaction-timestep-fraction", repr(float(compaction_timestep_fraction))]
-                    if compaction_timestep_fraction is not None else []) +
-                   (["--target-margin", repr(float(margin))] if margin is not None else []))
-    settings_label = (f" friction scales {scales}" if scales else "") + \
-        (f" compaction damping {compaction_damping:g}" if compaction_damping is not None else "") + \
-        (f" compaction step fraction {compaction_timestep_fraction:g}" if compaction_timestep_fraction is not None else "")
-    for kind, rule in (("target-phi", None), ("target-phi-unbalanced", "unbalanced-force")):
-        if kind not in methods:
-            continue
-        with method(f"BTR + {engine} target phi {target:.4g} damped {damping:g}{settings_label}" +
-                    (f" ({rule} rule)" if rule else ""), "target" if rule is None else "target-ub",
-                    wall_seconds=None, target_phi=target) as row:
-            r = relax_row(row, "relax_" + kind.replace("-", "_"), dep["csv"],
-                          target_args + (["--stop-rule", rule] if rule else []), dep)
-            row["target_phi_record"] = read_json(Path(r["csv"]).with_suffix(".json")).get("target_phi")
+    dampings = ([None] if compaction_damping is None else
+                list(compaction_damping) if isinstance(compaction_damping, (list, tuple)) else [compaction_damping])
+    for cd in dampings:
+        target_methods(cd, len(dampings) > 1)
     if "shake" in methods:
         with method(f"BTR + {shakes} shakes + {engine} relax", "shake", wall_seconds=None, shakes=shakes) as row:
             sh = btr_cli.shake(btr, scene_path, outdir / f"shake{shakes}", shakes, count, progress=progress)
