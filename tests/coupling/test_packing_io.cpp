@@ -118,7 +118,9 @@ TEST(PackingIO, AFailedWriteKeepsThePreviousPackingAndLeavesNoTemporaryFile) {
   EXPECT_EQ(slurp(dir / "p.vtp"), vtp);
   for (const auto& e : fs::directory_iterator(dir)) {
     const std::string name = e.path().filename().string();
-    if (e.path() != blocker) EXPECT_EQ(name.find(".tmp"), std::string::npos) << name;
+    if (e.path() != blocker) {
+      EXPECT_EQ(name.find(".tmp"), std::string::npos) << name;
+    }
   }
 
   // Point data of the wrong length is refused before anything is written.
