@@ -534,7 +534,7 @@ def plot_sizes(path: Path, done: list) -> str | None:
         return None
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    fig, ax = plt.subplots(figsize=(10, 4.8))
     labels = []
     for s in done:
         for m in s["methods"]:
@@ -547,19 +547,31 @@ def plot_sizes(path: Path, done: list) -> str | None:
                if m["status"] == "ok" and _size_label(m["method"]) == key]
         if not pts:
             continue
-        line, = ax.plot([p[0] for p in pts], [p[1] for p in pts], marker="o", label=key)
+        line, = ax.plot([p[0] for p in pts], [p[1] for p in pts], marker="o", label=_legend_label(key))
         for n, c, ok in pts:
             if ok:
                 ax.plot([n], [c], marker="o", ms=11, mfc="none", color=line.get_color())
     ax.axhline(0.1, color="gray", ls=":", lw=1, label="target 0.1 x pour")
     ax.set_xscale("log")
     ax.set_yscale("log")
+    counts = sorted({s["grains"] for s in done})
+    ax.set_xticks(counts)
+    ax.set_xticklabels([str(n) for n in counts])
+    ax.minorticks_off()
     ax.set_xlabel("grains N")
     ax.set_ylabel("cost / reference pour's (processor time)")
     ax.set_title("Cost against N (ringed: at the floor in phi, Z and g(r))")
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0))
     fig.tight_layout()
     return report.save_figure(fig, path)
+
+
+def _legend_label(key: str) -> str:
+    """A method's line label without the engine and the settings every target-phi line shares."""
+    for long, short in ((" compaction step fraction ", " step "), (" compaction damping ", ", compaction damping "),
+                        (" (unbalanced-force rule)", ", unbalanced-force rule")):
+        key = key.replace(long, short)
+    return key.replace(" liggghts", "").replace(" yade", " YADE")
 
 
 def _size_label(method: str) -> str:
