@@ -54,7 +54,7 @@ struct RelaxResult {
     bool reached = false;          // the in-run packing fraction reached the target
     double friction_scale = 0.0;   // the scale in force when it ended
     double time = 0.0;             // s, when the friction was restored
-    double packing_fraction = 0.0; // in-run estimate then (centres in the window)
+    double packing_fraction = 0.0; // the engine's in-run bulk packing fraction then (exact cut volumes)
   } compaction;
 };
 

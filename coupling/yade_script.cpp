@@ -26,6 +26,7 @@
 #include "coupling/dem_walls.h"
 #include "coupling/liggghts_script.h"
 #include "coupling/materials.h"
+#include "coupling/number_text.h"
 #include "coupling/relax_plan.h"
 #include "coupling/timestep.h"
 
@@ -35,9 +36,7 @@ namespace {
 // Round-trip decimal form of a double, a valid Python literal.
 std::string num(double v) {
   if (!std::isfinite(v)) throw std::invalid_argument("yade script: non-finite number " + std::to_string(v));
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
+  return g17(v);
 }
 
 std::string py_string(const std::string& s) {

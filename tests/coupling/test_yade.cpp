@@ -15,6 +15,7 @@
 
 #include "btr/run_scene.h"
 #include "btr/scene_toml.h"
+#include "coupling/number_text.h"
 #include "coupling/overlap.h"
 #include "coupling/relax.h"
 #include "coupling/relax_plan.h"
@@ -38,11 +39,7 @@ namespace {
 
 bool have_yade() { return fs::exists(std::string(btr::kYadePythonPath) + "/yade/__init__.py"); }
 
-std::string g17(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
+using btr::g17;
 
 // The walls the script must create, computed here from the container: "plane AXIS POSITION" and
 // "cylinder RADIUS".
