@@ -317,6 +317,23 @@ double mean_surface_height(const Grains& grains, int dimension, const Container&
   return n ? sum / n : 0.0;
 }
 
+BedHeightMeasures bed_height_measures(const Grains& grains, int dimension, const Container& container, double width) {
+  BedHeightMeasures m;
+  m.mean_height = mean_surface_height(grains, dimension, container, width);
+  double footprint = std::numeric_limits<double>::quiet_NaN();
+  switch (container.kind) {
+    case ContainerKind::Box:
+    case ContainerKind::Periodic: footprint = dimension == 3 ? container.size_x * container.size_y : container.size_x; break;
+    case ContainerKind::HeleShaw: footprint = container.size_x * container.gap; break;
+    case ContainerKind::Cylinder: footprint = M_PI * container.radius * container.radius; break;
+    default: break;
+  }
+  double volume = 0.0;
+  for (const Grain& g : grains) volume += dimension == 3 ? 4.0 / 3.0 * M_PI * g.r * g.r * g.r : M_PI * g.r * g.r;
+  m.packing_fraction = m.mean_height > 0.0 ? volume / (footprint * m.mean_height) : 0.0;
+  return m;
+}
+
 namespace {
 
 struct Span {

@@ -181,4 +181,14 @@ PackingMeasures measure_packing(const Grains& grains, int dimension, const Conta
 // grains centred in it; the mean over the columns that hold a grain. 0 without grains.
 double mean_surface_height(const Grains& grains, int dimension, const Container& container, double width);
 
+// The bed measured by its height, as seed 000 measures cohesive powders (beds too loose and thin for a
+// bulk window): the mean surface height <h> above (columns `width` wide) and the packing fraction
+// solid volume / (footprint * <h>), with the footprint the container's floor area (2D: its width;
+// Hele-Shaw: length x gap; cylinder: pi R^2). Open floors have no footprint: packing_fraction is NaN.
+struct BedHeightMeasures {
+  double mean_height = 0.0;
+  double packing_fraction = 0.0;
+};
+BedHeightMeasures bed_height_measures(const Grains& grains, int dimension, const Container& container, double width);
+
 }  // namespace btr

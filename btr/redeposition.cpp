@@ -74,11 +74,9 @@ std::vector<std::vector<std::size_t>> touching_clusters_in_blocks(const Grains& 
 
 CycleMeasures measure_cycle(const Grains& grains, int dimension, const Container& c) {
   CycleMeasures m;
-  m.mean_height = mean_surface_height(grains, dimension, c, mean_diameter(grains));
-  double volume = 0.0;
-  for (const Grain& g : grains) volume += dimension == 3 ? 4.0 / 3.0 * M_PI * g.r * g.r * g.r : M_PI * g.r * g.r;
-  const double footprint = dimension == 3 ? c.size_x * c.size_y : c.size_x;
-  m.packing_fraction = m.mean_height > 0.0 ? volume / (footprint * m.mean_height) : 0.0;
+  const BedHeightMeasures bed = bed_height_measures(grains, dimension, c, mean_diameter(grains));
+  m.mean_height = bed.mean_height;
+  m.packing_fraction = bed.packing_fraction;
   for (const auto& body : rigid_bodies(grains)) {
     if (m.size_counts.size() <= body.size()) m.size_counts.resize(body.size() + 1, 0);
     ++m.size_counts[body.size()];

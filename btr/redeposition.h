@@ -22,8 +22,8 @@ std::vector<std::vector<std::size_t>> touching_clusters_in_blocks(const Grains& 
                                                                   double contact_tol = 1e-7);
 
 struct CycleMeasures {
-  double mean_height = 0.0;       // <h>: strips one mean diameter wide, top of the highest grain of each
-  double packing_fraction = 0.0;  // grain volume / (footprint * <h>)
+  double mean_height = 0.0;       // <h>, strips one mean diameter wide (metrics.h: bed_height_measures)
+  double packing_fraction = 0.0;  // grain volume / (footprint * <h>) (metrics.h: bed_height_measures)
   std::vector<std::int64_t> size_counts;  // size_counts[s]: clusters of s grains (index 0 unused)
 };
 

@@ -446,6 +446,28 @@ TEST(SurfaceDepth, DepthBelowTheTopOfEachColumn) {
     EXPECT_NEAR(depth[i], (g[i].x.x() < 0.005 ? 0.02 : 0.006) - g[i].x.z(), 1e-15) << i;
 }
 
+// A simple cubic bed of nz layers: <h> is its top, 2 r nz, and the height packing fraction is the
+// lattice's, pi/6 (2D square: pi/4), whatever the strip width; an open floor has no footprint.
+TEST(BedHeightMeasures, SimpleCubicAndSquareLatticesHaveTheirPackingFraction) {
+  const double r = 1e-3;
+  const int n = 6, nz = 5;
+  const Grains sc = simple_cubic(n, nz, r, 0.0);
+  for (double width : {2 * r, 3.3 * r}) {
+    const BedHeightMeasures m = bed_height_measures(sc, 3, periodic(n * 2 * r, n * 2 * r), width);
+    EXPECT_NEAR(m.mean_height, 2 * r * nz, 1e-15) << width;
+    EXPECT_NEAR(m.packing_fraction, kPi / 6.0, 1e-12) << width;
+  }
+  Grains square;
+  for (int k = 0; k < nz; ++k)
+    for (int i = 0; i < n; ++i) square.push_back(grain(-n * r + (2 * i + 1) * r, 0.0, r + 2 * k * r, r));
+  const BedHeightMeasures m2 = bed_height_measures(square, 2, box(n * 2 * r), 2 * r);
+  EXPECT_NEAR(m2.mean_height, 2 * r * nz, 1e-15);
+  EXPECT_NEAR(m2.packing_fraction, kPi / 4.0, 1e-12);
+  Container open;
+  open.kind = ContainerKind::Open;
+  EXPECT_TRUE(std::isnan(bed_height_measures(sc, 3, open, 2 * r).packing_fraction));
+}
+
 // A Hele-Shaw heap poured at a corner leans on the left end wall: one flank only, measured on its own,
 // and stray grains rolled far along the floor beyond the foot do not enter the fit.
 TEST(HeapMeasures, HeleShawHeapAgainstAnEndWallHasOneFlank) {
