@@ -74,7 +74,8 @@ def test_hele_shaw_tiny(tmp_path, source_dir, btr_binary):
 
 def test_a_failed_method_is_a_row_with_its_reason(tmp_path, btr_binary, liggghts, monkeypatch):
     """The unbalanced-force relaxation is stopped by a 0.01 s wall-time limit: its row says fail with the
-    engine's reason, the rows before it are ok, the report lists it, and the study finishes."""
+    engine's reason, the rows before it are ok, the report lists it, and the study finishes. Run with seed 2:
+    the seed reaches the DEM pour too (it used to pour with seed 1 whatever --seed said)."""
     from btrdem import btr_cli
 
     real_relax = btr_cli.relax
@@ -87,7 +88,7 @@ def test_a_failed_method_is_a_row_with_its_reason(tmp_path, btr_binary, liggghts
     monkeypatch.setattr(btr_cli, "relax", relax)
     monkeypatch.setenv("BTR_BINARY", btr_binary)
     out = tmp_path / "hs"
-    res = hele_shaw.run_hele_shaw(out, tiny=True, progress=lambda m: None)
+    res = hele_shaw.run_hele_shaw(out, tiny=True, seed=2, progress=lambda m: None)
     rows = {r["method"]: r for r in res["rows"]}
     assert list(rows) == ["dem", "btr", "btr+relax", "btr+ub-relax"]
     failed = rows["btr+ub-relax"]
@@ -100,6 +101,9 @@ def test_a_failed_method_is_a_row_with_its_reason(tmp_path, btr_binary, liggghts
     run = json.loads((out / "run.json").read_text())
     assert run["status"] == "ok"
     assert [s["status"] for s in run["steps"]][-1] == "failed"
+    pour = json.loads((out / "cases" / "d1mm_w3" / "dem" / "pour_summary.json").read_text())
+    assert pour["seed"] == 2
+    assert "(seed 2)" in (out / "cases" / "d1mm_w3" / "dem" / "pour.data").read_text().splitlines()[0]
 
 
 def test_paper_material_by_hand():

@@ -145,7 +145,8 @@ def _run_case(btr, case_dir: Path, scene: dict, methods, pace: float, progress) 
             if csv_path is None:
                 raise
         summary = pour(read_packing(csv_path), case_dir / "dem",
-                       PourSettings(pace=pace, max_batches=20, label="pour " + scene["scene"]["name"]),
+                       PourSettings(pace=pace, max_batches=20, label="pour " + scene["scene"]["name"],
+                                    seed=int(scene["scene"]["seed"])),  # --seed varies the pour as well
                        progress=progress)
         return summary["packing"], summary["wall_seconds"], summary["stop_reason"]
 
