@@ -159,3 +159,21 @@ def test_comparison_tables_on_known_rows():
     # 20 x 0.5 x e^-5 = 0.0674 deg; the DEM angles at 20 d: 18.5 - 20, 19 - 20
     assert "theta(20 d) - theta_inf = +0.07 deg" in line
     assert "-1.50 (d = 1 mm, w = 20 d)" in line and "-1.00 (d = 2 mm, w = 20 d)" in line
+
+
+def test_scatter_summary_on_known_angles():
+    """Per-width mean and sample standard deviation by hand; the fit takes every pour as a point."""
+    w = [1.5, 3, 5, 7, 10, 15, 20, 30]
+    truth = [20.0 * (1 - (-0.3) * math.exp(-x / 4.0)) for x in w]
+    rows = [{"seed": s, "w_d": x, "theta_deg": t + dt} for x, t in zip(w, truth) for s, dt in ((1, -0.5), (2, 0.5))]
+    rows.append({"seed": 3, "w_d": 30, "theta_deg": truth[-1] + 1.5})
+    per_width, fits = hele_shaw._scatter_summary(rows)
+    assert [p["w_d"] for p in per_width] == w
+    p30 = per_width[-1]
+    assert p30["theta"] == [truth[-1] - 0.5, truth[-1] + 0.5, truth[-1] + 1.5]
+    assert math.isclose(p30["mean"], truth[-1] + 0.5, rel_tol=1e-12) and math.isclose(p30["std"], 1.0, rel_tol=1e-12)
+    assert math.isclose(per_width[0]["std"], math.sqrt(0.5), rel_tol=1e-12)  # -0.5 and +0.5 about the mean
+    fit, _ = fits["all widths"]
+    assert fit["points"] == 17 and fit["determined"]
+    assert abs(fit["theta_inf"] - 20.0) < 1.0 and abs(fit["l_d"] - 4.0) < 1.5, fit
+    assert fits["w >= 5 d"][0]["points"] == 13

@@ -397,3 +397,74 @@ def run_hele_shaw(outdir, reduced: bool = False, tiny: bool = False, pace: float
     rec.finish(summary)
     progress(f"hele-shaw: {summary['rows']} rows ({summary['failed']} failed); report {out / 'report.md'}")
     return {"rows": rows, "fits": fits, "n_sat": n_sat[0], "out": str(out)}
+
+
+def _scatter_summary(rows: list) -> tuple:
+    """Per width: the DEM angles of every seed, their mean and sample standard deviation; Eq. 9 fitted to
+    every pour (all seeds as points: the fit's errors then carry the pour-to-pour scatter), over all widths
+    and from w >= 5 d. rows: dicts with seed, w_d, theta_deg."""
+    by_w = {}
+    for r in rows:
+        by_w.setdefault(float(r["w_d"]), []).append(float(r["theta_deg"]))
+    per_width = [{"w_d": w, "theta": th, "mean": float(np.mean(th)),
+                  "std": float(np.std(th, ddof=1)) if len(th) > 1 else None} for w, th in sorted(by_w.items())]
+    fits = {}
+    for key, lo in (("all widths", 0.0), ("w >= 5 d", 5.0)):
+        sel = [r for r in rows if float(r["w_d"]) >= lo]
+        fits[key] = fit_eq9([float(r["w_d"]) for r in sel], [float(r["theta_deg"]) for r in sel])
+    return per_width, fits
+
+
+def dem_scatter(outdir, seeds, widths, reference_csv=None, d_mm: float = 1.0, pace: float = 1.0, progress=print):
+    """Pour-to-pour scatter of the DEM angle: the reduced study's cells (d = d_mm, N = 800 w / 3d) poured with
+    other seeds (the seed moves the pour's initial lattice and jitter), beside the seed-1 rows of
+    reference_csv (a hele_shaw.csv). A case whose dem/poured.csv exists is reused. Writes dem_scatter.csv and
+    dem_scatter.md into outdir. Usage (README, "Hele-Shaw heaps"):
+      cd workflows && /usr/bin/python3 -c "from btrdem.hele_shaw import dem_scatter; dem_scatter('../out/hand',
+          [2, 3], [1.5, 3, 5, 7, 10, 15, 20, 30], '../docs/hele_shaw/hele_shaw.csv')"
+    """
+    out = Path(outdir).resolve()
+    btr = find_btr()
+    base = read_scene_toml(BASE)
+    rows = []
+    if reference_csv:
+        for r in csv.DictReader(open(reference_csv)):
+            if (r["stage"] == "width" and r["method"] == "dem" and r["status"] == "ok" and float(r["d_mm"]) == d_mm
+                    and float(r["w_d"]) in [float(w) for w in widths]):
+                rows.append({"seed": 1, "w_d": float(r["w_d"]), "n": int(r["n"]), "theta_deg": float(r["theta_deg"]),
+                             "z_mean": float(r["z_mean"]), "wall_s": float(r["wall_s"]), "stop": r["stop"],
+                             "source": str(reference_csv)})
+    for seed in seeds:
+        for w in widths:
+            n = int(round(REDUCED["n_values"][2] * w / 3.0))
+            case = out / f"seed{seed}" / f"w{w:g}"
+            done = case / "dem" / "pour_summary.json"
+            if done.exists() and (case / "dem" / "poured.csv").exists():
+                s = json.loads(done.read_text())
+                csv_path, wall, stop = str(case / "dem" / "poured.csv"), s["wall_seconds"], s["stop_reason"]
+                if int(s.get("seed", -1)) != int(seed):
+                    raise RuntimeError(f"{done}: poured with seed {s.get('seed')}, not {seed}")
+            else:
+                scene = cell_scene(base, d_mm * 1e-3, float(w), n, REDUCED, int(seed))
+                csv_path, wall, stop = _run_case(btr, case, scene, ("dem",), pace, progress)["dem"]()
+            m = _measure(csv_path)
+            rows.append({"seed": seed, "w_d": float(w), "n": n, "theta_deg": m["theta"], "z_mean": m["z_mean"],
+                         "wall_s": wall, "stop": stop, "source": str(case)})
+            progress(f"seed {seed} w = {w:g} d: theta {m['theta']:.2f} deg, z {m['z_mean']:.3f}, {wall:.1f} s, {stop}")
+    keys = ["seed", "w_d", "n", "theta_deg", "z_mean", "wall_s", "stop", "source"]
+    atomic_write_text(out / "dem_scatter.csv", ",".join(keys) + "\n" + "".join(
+        ",".join(str(r[k]) for k in keys) + "\n" for r in rows))
+    per_width, fits = _scatter_summary(rows)
+    md = [f"# DEM angle, pour-to-pour scatter (d = {d_mm:g} mm, seeds {sorted({r['seed'] for r in rows})})", "",
+          "| w/d | theta per seed [deg] | mean | std |", "|---|---|---|---|"]
+    for p in per_width:
+        md.append(f"| {p['w_d']:g} | {', '.join(f'{t:.1f}' for t in p['theta'])} | {p['mean']:.2f} | "
+                  f"{report.fmt(p['std'], 2) if p['std'] is not None else '-'} |")
+    md += ["", "Eq. 9 fitted to every pour:"]
+    for key, (fit, why) in fits.items():
+        md.append(f"- {key}: " + (f"theta_inf = {fit['theta_inf']:.2f} +- {fit['theta_inf_err']:.2f} deg, alpha = "
+                                  f"{fit['alpha']:.3f} +- {fit['alpha_err']:.3f}, l = {fit['l_d']:.2f} +- "
+                                  f"{fit['l_d_err']:.2f} d (rms {fit['rms_deg']:.2f} deg, {fit['points']} pours)"
+                                  + ("" if fit["determined"] else "; not determined") if fit else f"not fitted: {why}"))
+    atomic_write_text(out / "dem_scatter.md", "\n".join(md) + "\n")
+    return rows, per_width, fits
