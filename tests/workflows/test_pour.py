@@ -64,3 +64,31 @@ def test_rain_on_an_open_floor_is_refused(tmp_path):
     btr = read_packing(grains_packing(tmp_path / "btr", scene))
     with pytest.raises(PourFailure, match="rain source needs a container footprint"):
         pour(btr, tmp_path / "pour", PourSettings(), quiet)
+
+
+def test_open_floor_pour_removes_and_counts_runaway_grains(tmp_path, liggghts):
+    """An open floor is bounded as btr relax bounds it: the box is fixed laterally at the footprint +
+    relax.open_margin largest diameters, and grains that slide out of it are removed and counted (a
+    shrink-wrapped box grew with every runaway grain instead)."""
+    scene = scene_json("open", 3, size=0.0, count=60, max_time=0.3, source={"kind": "point"})
+    scene["grains"]["components"][0]["material"]["friction"] = 0.01  # grains slide far on the floor
+    scene["relax"]["open_margin"] = 1.0
+    btr = read_packing(grains_packing(tmp_path / "btr", scene))
+    s = pour(btr, tmp_path / "pour", PourSettings(seed=3, max_batches=4), quiet)
+    assert s["removed"] > 0
+    q = read_packing(s["packing"])
+    assert len(q) + s["removed"] == len(btr)
+    assert np.array_equal(q.ids, np.arange(1, len(q) + 1))  # the others keep their order, renumbered
+    removed = np.array(q.meta["removed"]["ids"])
+    kept = np.setdiff1d(np.arange(1, len(btr) + 1), removed) - 1
+    assert len(removed) == s["removed"] and np.allclose(q.radius, btr.radius[kept])
+    assert "boundary f f f" in (tmp_path / "pour" / "in.pour").read_text()
+    data = (tmp_path / "pour" / "pour.data").read_text().splitlines()
+    xlo, xhi = (float(v) for v in next(line for line in data if line.endswith("xlo xhi")).split()[:2])
+    ylo, yhi = (float(v) for v in next(line for line in data if line.endswith("ylo yhi")).split()[:2])
+    d_max = 2 * btr.radius.max()
+    # the region holds the BTR footprint grown by one largest diameter, and every grain still in the run
+    assert xlo <= -btr.radius.max() - d_max + 1e-12 and xhi >= btr.radius.max() + d_max - 1e-12
+    assert xhi - xlo < 20 * d_max  # fixed near the footprint, not grown by the runaway grains
+    assert np.all((q.pos[:, 0] >= xlo) & (q.pos[:, 0] <= xhi) & (q.pos[:, 1] >= ylo) & (q.pos[:, 1] <= yhi))
+    assert np.all(q.pos[:, 2] >= q.radius * 0.97)

@@ -161,3 +161,39 @@ def test_size_study_new_methods_failed_count_and_reused_pours(tmp_path, btr_bina
                               / "relaxed.json").read_text())
         if relaxed["target_phi"]["compaction_ran"]:
             assert relaxed["target_phi"]["compaction_damping"] == r["compaction_damping"]
+
+
+def test_error_vs_runtime_on_an_open_floor_heap_counts_removed_grains(tmp_path, source_dir, btr_binary, liggghts):
+    """A user's heap on an open floor: the pours and relaxations run in a bounded region, grains that slide
+    out of it are removed and counted, and the report says how many (the pours' shrink-wrapped box grew
+    with every runaway grain before, and the heap angle is the measure compared)."""
+    scene = source_dir / "inputs" / "heap3d.toml"
+    text = scene.read_text().replace("count = 5000", "count = 1000").replace("max_time = 1.0", "max_time = 0.3")
+    text += "open_margin = 1.0\n"
+    assert "count = 1000" in text and text.rstrip().endswith("open_margin = 1.0")
+    (tmp_path / "heap.toml").write_text(text)
+    out = tmp_path / "evr"
+    p = run(["error-vs-runtime", str(tmp_path / "heap.toml"), "-o", str(out), "--relax-times", "0.3",
+             "--pours", "1:1e-3", "--methods", "relax,target-phi"], source_dir)
+    assert p.returncode == 0, p.stdout + p.stderr
+    res = json.loads((out / "error_vs_runtime.json").read_text())
+    assert "angle_of_repose" in res["measures"]
+    # a heap has no bulk window, so no packing fraction to target: that method is a row with its reason
+    target = [r for r in res["rows"] if r["kind"] == "target"]
+    assert len(target) == 1 and target[0]["status"] == "fail" and "no packing fraction to target" in target[0]["reason"]
+    assert all(r["status"] == "ok" for r in res["rows"] if r["kind"] != "target"), \
+        [(r["method"], r["reason"]) for r in res["rows"]]
+    removed = res["reference"]["removed"] + [r.get("removed", 0) for r in res["rows"]]
+    assert sum(removed) > 0
+    for k, n in enumerate(res["reference"]["removed"]):  # each pour's packing holds the grains it kept
+        poured = out / f"reference_seed{k + 1}" / "poured.csv"
+        assert sum(1 for _ in open(poured)) - 1 == 1000 - n
+    md = (out / "error_vs_runtime.md").read_text()
+    assert "## Grains removed on the open floor" in md
+    # with no bulk window, "all" means the measures the heap has, not an empty set every method reaches
+    assert res["verdict"]["core_measures"] == [k for k in res["measures"] if k in ("angle_of_repose", "segregation")]
+    assert res["verdict"]["core_measures"]
+    limit = res["reference"]["reach_threshold"]
+    btr_row = res["rows"][0]
+    btr_reaches = all(btr_row["errors"][k] <= limit[k] for k in res["verdict"]["core_measures"])
+    assert (res["verdict"]["per_measure"]["all"] or {}).get("method") != "BTR" or btr_reaches

@@ -157,7 +157,8 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
                  "wall_seconds": [s["wall_seconds"] for s in ref_runs],
                  "cpu_seconds": [s.get("cpu_seconds") for s in ref_runs],
                  "reused": [bool(s.get("reused")) for s in ref_runs],
-                 "stop_reasons": [s["stop_reason"] for s in ref_runs]}
+                 "stop_reasons": [s["stop_reason"] for s in ref_runs],
+                 "removed": [int(s.get("removed", 0)) for s in ref_runs]}
 
     basis = "cpu" if ref_cpu is not None else "wall"
     ref_cost = ref_cpu if ref_cpu is not None else ref_wall
@@ -193,15 +194,17 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
         row["values"] = m = measures_of(r["csv"], margin)
         row.update(wall_seconds=start["wall_seconds"] + r["wall_seconds"], relax_wall_seconds=r["wall_seconds"],
                    cpu_seconds=_sum_or_none(start.get("cpu_seconds"), r.get("cpu_seconds")),
-                   errors=errors_of(m, mean, names), path=r["csv"], stdout=r["stdout"][-600:])
+                   errors=errors_of(m, mean, names), path=r["csv"], stdout=r["stdout"][-600:],
+                   removed=removed_by_relax(r["csv"]))
         return r
 
-    target = mean["packing_fraction"] if target_phi == "pour" else float(target_phi)
+    # A heap (or a bed too thin for a bulk window) has no packing fraction to aim at: its target-phi rows fail.
+    target = mean.get("packing_fraction") if target_phi == "pour" else float(target_phi)
 
     def target_methods(cd, name_by_damping):
         """The target-phi methods (kinetic and unbalanced-force rule) with compaction damping cd (None: btr's)."""
         scales = "" if friction_scales is None else ",".join(f"{x:g}" for x in friction_scales)
-        target_args = (["--target-phi", repr(float(target)), "--damping", repr(float(damping))] +
+        target_args = (["--target-phi", repr(float(target or 0.0)), "--damping", repr(float(damping))] +
                        (["--friction-scales", scales] if scales else []) +
                        (["--compaction-damping", repr(float(cd))] if cd is not None else []) +
                        (["--compaction-timestep-fraction", repr(float(compaction_timestep_fraction))]
@@ -215,9 +218,13 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
             if kind not in methods:
                 continue
             folder = "relax_" + kind.replace("-", "_") + (f"_cd{cd:g}" if name_by_damping else "")
-            with method(f"BTR + {engine} target phi {target:.4g} damped {damping:g}{settings_label}" +
+            phi_label = f"{target:.4g}" if target is not None else "of the pours (none)"
+            with method(f"BTR + {engine} target phi {phi_label} damped {damping:g}{settings_label}" +
                         (f" ({rule} rule)" if rule else ""), "target" if rule is None else "target-ub",
                         wall_seconds=None, target_phi=target, compaction_damping=cd) as row:
+                if target is None:
+                    raise StepFailed("no packing fraction to target: the reference pours have an empty bulk window "
+                                     "(a heap, or a bed thinner than the window's margins); --target-phi PHI sets one")
                 r = relax_row(row, folder, dep["csv"], target_args + (["--stop-rule", rule] if rule else []), dep)
                 row["target_phi_record"] = read_json(Path(r["csv"]).with_suffix(".json")).get("target_phi")
 
@@ -260,7 +267,7 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
             row["values"] = m = measures_of(s["packing"], margin)
             row.update(wall_seconds=s["wall_seconds"], cpu_seconds=s.get("cpu_seconds"),
                        errors=errors_of(m, mean, names), path=s["packing"],
-                       stop_reason=s["stop_reason"], reused=bool(s.get("reused")))
+                       stop_reason=s["stop_reason"], reused=bool(s.get("reused")), removed=int(s.get("removed", 0)))
 
     with rec.step("table and plot") as st:
         result = write_tables(rows)
@@ -274,6 +281,12 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
     rec.finish({"verdict": verdict["summary"]})
     progress(verdict["summary"])
     return result
+
+
+def removed_by_relax(relaxed_csv) -> int:
+    """Grains an open floor's relaxation removed (relaxed.json relax.removed.count; 0 elsewhere)."""
+    meta = read_json(Path(relaxed_csv).with_suffix(".json"))
+    return int(((meta.get("relax") or {}).get("removed") or {}).get("count", 0))
 
 
 def _sum_or_none(*xs):
@@ -296,7 +309,9 @@ def first_to_floor(rows, floor, names, ref_cost, n_seeds) -> dict:
     """Per measure, and over the core measures (packing fraction, coordination, g(r): "all"): the cheapest method
     whose error is within the floor, with its cost (rows' cost_seconds) relative to the reference pour's."""
     limit = reach_threshold(floor, n_seeds)
-    core = [k for k in names if k in CORE_MEASURES]
+    # A heap has no bulk window, hence none of the core measures: then "all" is every measure it has (the
+    # angle of repose, the segregation index), never an empty set that every method would reach.
+    core = [k for k in names if k in CORE_MEASURES] or list(names)
 
     def reaches(row, keys):
         return all(row["errors"][k] is not None and row["errors"][k] <= limit[k] for k in keys)
@@ -416,6 +431,13 @@ def markdown(res: dict, fig_name: str) -> str:
     lines += ["## Errors", "", report.md_table(headers, rows)]
     if failed:
         lines += ["## Failed methods", "", report.md_table(["method", "status", "reason"], failed)]
+    removed = [(f"reference pour seed {s}", n) for s, n in zip(ref["seeds"], ref.get("removed", [])) if n] + \
+        [(r["method"], r["removed"]) for r in res["rows"] if r["status"] == "ok" and r.get("removed")]
+    if removed:
+        lines += ["## Grains removed on the open floor", "",
+                  "Grains whose centre left the region (the footprint + relax.open_margin largest diameters) were "
+                  f"removed from the run and counted; the measures are those of the rest (of {res['grains']}).", "",
+                  report.md_table(["run", "grains removed"], removed)]
     defs = next((r["values"]["definitions"] for r in res["rows"] if r["status"] == "ok"), None)
     lines += ["## Values", "", report.md_table(vals[0], vals[1:])]
     if defs:

@@ -16,7 +16,11 @@ How the pour works (the input is written here, LIGGGHTS 3.8 syntax):
 - 2D scenes (disks in the x-z plane) are run as spheres whose y force is held at zero.
 Contact model: Hertz (or Hooke) with tangential history, the scene's material, walls for the
 container (floor z = 0; none laterally for open and periodic containers, periodic boundaries for
-the latter). Time step: the Rayleigh time of the smallest grain times the scene's fraction.
+the latter). Open floors are bounded as `btr relax` bounds them (coupling/README.md, "Open floors"):
+the box is fixed laterally at the grains' footprint (the BTR packing's and the pour lattice's) grown by
+relax.open_margin largest diameters, and a grain whose centre leaves it is lost to LIGGGHTS, i.e.
+removed, and counted (poured.json "removed", the summary's "removed"); the others keep their order,
+renumbered. A shrink-wrapped box grew with every runaway grain until binning took most of each step. Time step: the Rayleigh time of the smallest grain times the scene's fraction.
 """
 from __future__ import annotations
 
@@ -168,8 +172,22 @@ def _wall_fixes(container: Container, models: str, wall_type: int) -> list:
     return lines
 
 
-def _domain(container: Container, pos, radius):
-    """(boundary string, xlo, xhi, ylo, yhi, zlo, zhi) of the simulation box."""
+def open_region(pos, radius, scene: dict):
+    """(lo, hi): lateral (x, y) bounds of an open floor's region, as btr relax sets them: the extents of
+    the grains (pos, radius) grown by relax.open_margin (default 10) largest diameters."""
+    margin_d = float((scene.get("relax") or {}).get("open_margin", 10.0))
+    if not margin_d > 0:
+        raise PourFailure(f"pour: scene relax.open_margin: expected a positive number, got {margin_d!r}")
+    r = np.asarray(radius)[:, None]
+    grow = margin_d * 2.0 * float(np.max(radius))
+    lo = np.min(pos[:, :2] - r, axis=0) - grow
+    hi = np.max(pos[:, :2] + r, axis=0) + grow
+    return lo, hi
+
+
+def _domain(container: Container, pos, radius, region=None):
+    """(boundary string, xlo, xhi, ylo, yhi, zlo, zhi) of the simulation box; region: an open floor's
+    lateral bounds (open_region)."""
     r_max = float(np.max(radius))
     pad = 2.0 * r_max
     zhi = float(np.max(pos[:, 2])) + 4.0 * r_max
@@ -189,17 +207,17 @@ def _domain(container: Container, pos, radius):
     if container.kind == "cylinder":
         h = container.radius + pad
         return "f f f", -h, h, -h, h, zlo, zhi
-    # open floor: shrink-wrapped laterally so grains rolling away are not lost
-    lo = pos.min(axis=0) - pad
-    hi = pos.max(axis=0) + pad
+    # open floor: fixed at the removal region (a grain leaving it is lost, i.e. removed, and counted)
+    lo, hi = region
     if container.dimension == 2:
-        lo[1], hi[1] = -pad, pad
-    return "m m f", lo[0], hi[0], lo[1], hi[1], zlo, zhi
+        return "f f f", lo[0], hi[0], -pad, pad, zlo, zhi
+    return "f f f", lo[0], hi[0], lo[1], hi[1], zlo, zhi
 
 
 def write_inputs(workdir: Path, radius, species, container: Container, scene: dict, settings: PourSettings,
-                 btr_top: float):
-    """Writes workdir/pour.data and workdir/in.pour; returns a dict of the numbers used."""
+                 btr_top: float, btr_pos=None):
+    """Writes workdir/pour.data and workdir/in.pour; returns a dict of the numbers used. btr_pos: the BTR
+    packing's positions, whose footprint bounds an open floor's region with the lattice's."""
     relax = scene.get("relax") or {}
     model = relax.get("model", "hertz")
     if model not in ("hertz", "hooke", "hooke-stiffness"):
@@ -225,7 +243,11 @@ def write_inputs(workdir: Path, radius, species, container: Container, scene: di
     gap = settings.drop_gap_d * d_mean
 
     # ---- data file ----
-    boundary, xlo, xhi, ylo, yhi, zlo, zhi = _domain(container, pos, radius)
+    region = None
+    if container.kind == "open":
+        pts, rs = (pos, radius) if btr_pos is None else (np.vstack([pos, btr_pos]), np.concatenate([radius, radius]))
+        region = open_region(pts, rs, scene)
+    boundary, xlo, xhi, ylo, yhi, zlo, zhi = _domain(container, pos, radius, region)
     rows = [f"LIGGGHTS data file written by btrdem.pour (seed {settings.seed})", "",
             f"{len(radius)} atoms", f"{len(types) + 1} atom types", "",
             f"{xlo:.17g} {xhi:.17g} xlo xhi", f"{ylo:.17g} {yhi:.17g} ylo yhi", f"{zlo:.17g} {zhi:.17g} zlo zhi", "",
@@ -310,7 +332,7 @@ def write_inputs(workdir: Path, radius, species, container: Container, scene: di
           "variable t equal time", "variable na equal count(all)",
           f"variable thr equal {threshold:.17g}", f"variable tmax equal {t_max:.17g}",
           f"thermo_style custom step time atoms c_ket c_ker", f"thermo {thermo_every}",
-          "thermo_modify lost error norm no",
+          f"thermo_modify lost {'ignore' if region is not None else 'error'} norm no",
           f"fix kehist all print {thermo_every} \"${{t}} ${{ke}}\" file kinetic.txt screen no title \"# time ke\""]
     top_var = "variable top equal bound(released,zmax)"
     for k, (first, last) in enumerate(batches):
@@ -340,11 +362,14 @@ def write_inputs(workdir: Path, radius, species, container: Container, scene: di
     return {"timestep": dt, "timestep_rule": rule, "model": model, "kinetic_threshold": threshold,
             "stop_ratio": stop_ratio, "settle_max_time": settle_max, "schedule_time": schedule_time,
             "batches": len(batches), "batch_steps": batch_steps, "drop_gap": gap, "hold_base": hold_base,
-            "lattice": lattice, "initial_potential_energy":
+            "lattice": lattice, "open_region": None if region is None else
+                {"x": [float(region[0][0]), float(region[1][0])], "y": [float(region[0][1]), float(region[1][1])]},
+            "initial_potential_energy":
                 float(np.sum(dem_params.masses(radius, species, scene) * g * pos[:, 2]))}
 
 
-def read_dump(path: Path, n: int):
+def read_dump(path: Path, n: int, may_lose: bool = False):
+    """Columns of a LIGGGHTS dump of n grains (fewer allowed with may_lose: an open floor's removed grains)."""
     with open(path) as f:
         lines = f.read().splitlines()
     try:
@@ -353,7 +378,7 @@ def read_dump(path: Path, n: int):
         raise PourFailure(f"{path}: no ITEM: ATOMS section") from None
     cols = lines[start].split()[2:]
     data = np.array([[float(v) for v in line.split()] for line in lines[start + 1:] if line.strip()])
-    if data.shape[0] != n:
+    if data.shape[0] != n and not (may_lose and data.shape[0] <= n):
         raise PourFailure(f"{path}: expected {n} grains, got {data.shape[0]} (grains lost)")
     return {c: data[:, k] for k, c in enumerate(cols)}
 
@@ -404,7 +429,7 @@ def pour(btr: Packing, outdir: str | os.PathLike, settings: PourSettings = PourS
     out = Path(outdir)
     out.mkdir(parents=True, exist_ok=True)
     top = float(np.max(btr.pos[:, 2] + btr.radius))
-    plan = write_inputs(out, btr.radius, btr.species, container, scene, settings, top)
+    plan = write_inputs(out, btr.radius, btr.species, container, scene, settings, top, btr.pos)
     progress(f"  [{settings.label}] {len(btr)} grains, {plan['batches']} batches, dt = {plan['timestep']:.3g} s, "
              f"schedule {plan['schedule_time']:.3g} s + settling <= {plan['settle_max_time']:.3g} s")
     argv = ["liggghts", "-in", "in.pour", "-log", "log.liggghts", "-screen", "none", "-echo", "none"]
@@ -425,13 +450,17 @@ def pour(btr: Packing, outdir: str | os.PathLike, settings: PourSettings = PourS
     stop, final = _log_marks(log)
     if stop is None:
         raise PourFailure(f"{settings.label}: LIGGGHTS finished without a stop mark (see {log})")
-    dump = read_dump(out / "final.dump", len(btr))
+    dump = read_dump(out / "final.dump", len(btr), may_lose=container.kind == "open")
     xyz = np.column_stack([dump["x"], dump["y"], dump["z"]])
     if not np.all(np.isfinite(xyz)):
         raise PourFailure(f"{settings.label}: NaN positions in {out / 'final.dump'}")
     ids = dump["id"].astype(np.int64)
-    if not np.array_equal(ids, np.arange(1, len(btr) + 1)):
+    kept = ids - 1  # indices into btr's grains
+    if not (np.all(np.diff(ids) > 0) and len(ids) and ids[0] >= 1 and ids[-1] <= len(btr)) or (
+            container.kind != "open" and len(ids) != len(btr)):
         raise PourFailure(f"{settings.label}: {out / 'final.dump'}: ids are not 1..{len(btr)}")
+    removed_ids = np.setdiff1d(np.arange(1, len(btr) + 1), ids)
+    ids = np.arange(1, len(ids) + 1)
     if container.dimension == 2:
         xyz[:, 1] = 0.0
     kin = np.loadtxt(out / "kinetic.txt", comments="#", ndmin=2) if (out / "kinetic.txt").exists() else np.zeros((0, 2))
@@ -440,7 +469,7 @@ def pour(btr: Packing, outdir: str | os.PathLike, settings: PourSettings = PourS
     if len(kin) and np.max(kin[:, 1]) > 10.0 * plan["initial_potential_energy"]:
         raise PourFailure(f"{settings.label}: kinetic energy {np.max(kin[:, 1]):.3g} J exceeds ten times the "
                           f"initial potential energy {plan['initial_potential_energy']:.3g} J (blow-up)")
-    tol = 0.5 * btr.radius
+    tol = 0.5 * btr.radius[kept]
     low = xyz[:, 2] < -tol
     walls = container.wall_distance(xyz) < -tol if container.has_walls() else np.zeros(len(xyz), bool)
     if np.any(low | walls):
@@ -452,20 +481,25 @@ def pour(btr: Packing, outdir: str | os.PathLike, settings: PourSettings = PourS
             "stop_reason": stop, "simulated_time": final[0] if final else None,
             "final_kinetic_energy": final[1] if final else None,
             "timings": {"pour_wall_seconds": res["wall_seconds"], "pour_cpu_seconds": res["cpu_seconds"]},
-            "counts": {"grains": len(btr)}}
-    poured = Packing(ids=ids, pos=xyz, radius=dump["radius"], species=btr.species.copy(), meta=meta,
+            "counts": {"grains": len(ids), "poured": len(btr)}}
+    if plan["open_region"] is not None:
+        meta["removed"] = {"count": int(len(removed_ids)), "ids": removed_ids.tolist(), "region": plan["open_region"],
+                           "rule": "grains whose centre left the region (the footprint + relax.open_margin largest "
+                                   "diameters) were removed; ids are the BTR packing's; the others are renumbered"}
+    poured = Packing(ids=ids, pos=xyz, radius=dump["radius"], species=btr.species[kept].copy(), meta=meta,
                      path=str(out / f"{name}.csv"))
-    if not np.allclose(poured.radius, btr.radius, rtol=1e-6):
+    if not np.allclose(poured.radius, btr.radius[kept], rtol=1e-6):
         raise PourFailure(f"{settings.label}: radii in final.dump differ from the BTR packing's")
-    poured.radius = btr.radius.copy()
+    poured.radius = btr.radius[kept].copy()
     write_packing(out, name, poured)
     summary = {"wall_seconds": res["wall_seconds"], "cpu_seconds": res["cpu_seconds"], "stop_reason": stop, "simulated_time": meta["simulated_time"],
                "timestep": plan["timestep"], "batches": plan["batches"], "packing": str(out / f"{name}.csv"),
-               "seed": settings.seed}
+               "seed": settings.seed, "removed": int(len(removed_ids))}
     write_json(out / "pour_summary.json", summary)
     progress(f"  [{settings.label}] done in {res['wall_seconds']:.1f} s wall ({res['cpu_seconds']:.1f} s CPU), "
              f"{meta['simulated_time']:.3g} s "
-             f"simulated, stop: {stop}")
+             f"simulated, stop: {stop}" + (f"; {len(removed_ids)} grain(s) left the open floor's region, removed"
+                                            if len(removed_ids) else ""))
     return summary
 
 
@@ -486,6 +520,8 @@ def finished_pour(btr: Packing, outdir: str | os.PathLike, settings: PourSetting
     if any(getattr(settings, k) is not None and ran.get(k) != getattr(settings, k) for k in _REUSE_KEYS):
         return None
     poured = read_packing(str(csv))
-    if len(poured) != len(btr) or not np.allclose(poured.radius, btr.radius, rtol=1e-12, atol=0.0):
+    removed = np.asarray((meta.get("removed") or {}).get("ids", []), dtype=np.int64)
+    kept = np.setdiff1d(np.arange(1, len(btr) + 1), removed) - 1
+    if len(poured) != len(kept) or not np.allclose(poured.radius, btr.radius[kept], rtol=1e-12, atol=0.0):
         return None
     return dict(summary, reused=True)
