@@ -529,8 +529,12 @@ def markdown(res: dict, fig_name: str) -> str:
                "unbalanced force)", "largest overlap / r (floor)",
                "predicted static overlap / r (1 grain; column)", "rule step [s]", "margin (largest bounded multiple)",
                "unbounded because", "wall [s]"]
-    table = []
+    table, notes = [], []
     for r in res["rows"]:
+        start = r.get("start", "-")
+        if start.startswith("touching (pre-load refused: "):  # the reason goes under the table
+            notes.append(f"- {r['case']} / {r['engine']}: {start[len('touching ('):-1]}")
+            start = "touching (pre-load refused)"
         pred = r.get("predicted_overlap")
         ov = r.get("overlap") or {}
         e = r.get("edge") or {}
@@ -539,7 +543,7 @@ def markdown(res: dict, fig_name: str) -> str:
             uf = r.get("final_unbalanced_force")
             stop = (f"{r['stop_reason']} ({r['simulated_time']:.3g}; {r['final_kinetic_ratio']:.3g}; "
                     + (f"{uf:.2g})" if uf is not None else "-)"))
-        table.append([r["case"], r["engine"], r.get("grains", "-"), r.get("start", "-"), r.get("verdict", r["status"]),
+        table.append([r["case"], r["engine"], r.get("grains", "-"), start, r.get("verdict", r["status"]),
                       r["reason"] or "-", stop,
                       f"{ov['largest']:.3g} ({ov['floor']:.3g})" if ov else "-",
                       f"{pred['single']:.3g}; {pred['column']:.3g} ({pred['law']})" if pred else "-",
@@ -554,4 +558,5 @@ def markdown(res: dict, fig_name: str) -> str:
         "static overlap beside it); refused (with the coupling's reason). The edge: forced steps of m x the rule's "
         f"step over {res['window_rule_steps']} rule steps, doubled then bisected; bounded = exit 0, kinetic energy "
         f"at most {GROWTH:g} x the rule-step run's, overlap bounded.", "", "## Summary", "", res["summary"], "",
-        "## Cases", "", report.md_table(headers, table), f"![stable-step margin]({fig_name})", ""])
+        "## Cases", "", report.md_table(headers, table), *(["", "Started touching:", *notes, ""] if notes else []),
+        f"![stable-step margin]({fig_name})", ""])
