@@ -89,7 +89,7 @@ def build_cases(tiny: bool = False, full: bool = False) -> list:
     """The material cases: one scene each. tiny: the fewest grains that still run; full: the 1e4-grain column."""
     n = 12 if tiny else 40
     # The tall steel column: 1000 grains in a 3 d x 3 d cell (about 100 d tall); --full: the issue's 1e4
-    # grains in a 6 d x 6 d cell (about 240 d tall: wider rather than 1000 d tall).
+    # grains in a 6 d x 6 d cell (about 250 d tall: wider rather than 1000 d tall).
     column = 30 if tiny else (10000 if full else 1000)
     column_cell = 0.012 if full and not tiny else 0.006
     return [
