@@ -4,7 +4,7 @@ found by bisection, as a multiple of the coupling's rule (coupling/timestep.h).
 Every run starts pre-loaded (START: `btr relax --preload`, coupling/preload.h: each contact starts with
 the overlap that carries its static force, so a stiff bed starts near rest); if the pre-load is refused
 (its packing overlaps beyond the intended overlaps above --max-overlap, e.g. soft 5 cm grains whose
-law overlap is a quarter of a radius) the case runs from the touching start and its row says so.
+law overlaps reach half a radius) the case runs from the touching start and its row says so.
 
 For every material case and engine:
 1. **Run to rest** at the rule's step: the run ends at its stop rule (REST_STOP_RULE, unbalanced force:
