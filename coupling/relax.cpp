@@ -371,6 +371,12 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
   out = std::move(kept_grains);
   res.velocities = std::move(kept_velocities);
   const OverlapReport final_overlap = largest_overlap(out, scene.dimension, c);
+  // The largest grain-floor overlap / that grain's radius (the floor's share of final_overlap, which
+  // takes every wall and pair): the static overlap a grain's column load gives on the floor.
+  double final_floor_overlap = 0.0;
+  for_each_overlap(out, scene.dimension, c, [&](std::int64_t a, std::int64_t, double depth, const DemWall* w) {
+    if (w && w->name == "floor") final_floor_overlap = std::max(final_floor_overlap, depth / out[a - 1].r);
+  });
   // The adapter's metadata (the input's, plus anything engine-specific under "relax") is kept; the
   // common fields are set here, the same for every engine.
   nlohmann::json meta = res.relaxed.meta.is_object() ? res.relaxed.meta
@@ -396,6 +402,7 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
       {"final_kinetic_energy", res.kinetic_history.empty() ? 0.0 : res.kinetic_history.back().second},
       {"initial_largest_overlap", plan.largest_overlap},
       {"final_largest_overlap", final_overlap.largest},
+      {"final_largest_floor_overlap", final_floor_overlap},
       {"contacts", res.contacts.size()},
       {"stop_rule", plan.stop_rule},
       {"stop_threshold", stop_threshold(plan)},

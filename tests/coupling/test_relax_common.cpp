@@ -286,6 +286,24 @@ TEST(RelaxChecks, SuccessWritesTheOutputs) {
   EXPECT_TRUE(fs::exists(f.dir + "/relaxed.vtp"));
 }
 
+TEST(RelaxChecks, FinalOverlapsInRelaxedJson) {
+  // Three grains placed by hand in the relaxed result: grain 1 (r 1 mm) 0.03 r into the floor, grain 2
+  // (r 0.5 mm) 0.02 r into it, grain 3 (r 0.5 mm) on grain 1 with a pair overlap of 0.1 of the smaller
+  // radius: the floor overlap is 0.03 of grain 1's radius, the largest overlap the pair's 0.1.
+  FakeRun f("fake_floor_overlap");
+  f.packing.grains = {grain(0, 0, 1e-3, 1e-3), grain(0.005, 0, 0.5e-3, 0.5e-3), grain(0, 0, 2.6e-3, 0.5e-3)};
+  f.adapter.result = [inner = f.adapter.result](const btr::Packing& p) {
+    btr::RelaxResult r = inner(p);
+    r.relaxed.grains = {grain(0, 0, 0.97e-3, 1e-3), grain(0.005, 0, 0.49e-3, 0.5e-3),
+                        grain(0, 0, 0.97e-3 + 1.5e-3 - 0.05e-3, 0.5e-3)};
+    return r;
+  };
+  f.run();
+  const btr::Packing out = btr::read_packing(f.dir + "/relaxed.csv");
+  EXPECT_NEAR(out.meta["relax"]["final_largest_floor_overlap"].get<double>(), 0.03, 1e-9);
+  EXPECT_NEAR(out.meta["relax"]["final_largest_overlap"].get<double>(), 0.1, 1e-9);
+}
+
 TEST(RelaxChecks, FailedCommandCarriesTheLogTail) {
   FakeRun f("fake_exit");
   f.adapter.shell = "echo 'ERROR: boom at step 12' > fake.log; exit 2";

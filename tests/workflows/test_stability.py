@@ -1,6 +1,6 @@
 """The stability sweep at tiny size, with the real engines: every verdict (stable, unstable, outside
-validity, refused), a forced step that blows up in each engine, the hidden --force-timestep, the
-bisection and the predicted static overlap against closed forms."""
+validity, refused, not at rest), a forced step that blows up in each engine, the hidden --force-timestep,
+the pre-loaded start and its fallback, the bisection and the predicted static overlap against closed forms."""
 import json
 import math
 import subprocess
@@ -9,6 +9,7 @@ import sys
 import numpy as np
 import pytest
 
+from btrdem import btr_cli
 from btrdem import stability as st
 from btrdem.io import read_packing, write_scene_toml
 
@@ -26,16 +27,18 @@ def tiny_case(tmp_path, btr_binary, name, **kw):
     return str(out / "btr.csv")
 
 
-def rest(btr_binary, csv, engine, out, max_time=0.05):
-    run = st.relax_once(btr_binary, csv, engine, out, max_time, time_limit=120, progress=lambda m: None)
-    return run, st.rest_verdict(run, str(out / "relaxed.csv"), 1e-12)
+def rest(btr_binary, csv, engine, out, max_time=0.05, preload=True, time_limit=120):
+    """A rest run as the sweep makes it: pre-loaded start, its stop rule."""
+    run = st.relax_once(btr_binary, csv, engine, out, max_time, time_limit=time_limit, progress=lambda m: None,
+                        preload=preload, stop_rule=st.REST_STOP_RULE)
+    return run, st.rest_verdict(run, 1e-12)
 
 
 def test_force_timestep_is_hidden_forced_and_recorded(tmp_path, btr_binary, liggghts):
     help_text = subprocess.run([btr_binary, "relax", "--help"], capture_output=True, text=True).stdout
     assert "--timestep" in help_text and "--force-timestep" not in help_text
     csv = tiny_case(tmp_path, btr_binary, "base")
-    run, (verdict, reason, _) = rest(btr_binary, csv, "liggghts", tmp_path / "rule", max_time=0.02)
+    run, (verdict, reason, _) = rest(btr_binary, csv, "liggghts", tmp_path / "rule", max_time=0.02, preload=False)
     assert verdict == "stable", reason
     dt = run["stable_step"]
     assert run["relax"]["timestep_forced"] is False and run["relax"]["timestep"] == pytest.approx(dt, rel=1e-5)
@@ -63,6 +66,12 @@ def test_forced_step_blows_up_and_rule_step_is_stable(tmp_path, btr_binary, ligg
     run, (verdict, reason, info) = rest(btr_binary, csv, engine, tmp_path / "rule")
     assert verdict == "stable", reason
     assert info["overlap"]["largest"] < st.OVERLAP_BOUND
+    # the pre-loaded start was used, and the overlaps are relaxed.json's, which agree with the packing
+    assert (tmp_path / "rule" / "preloaded.csv").exists()
+    p = read_packing(str(tmp_path / "rule" / "relaxed.csv"))
+    floor = float(np.max((p.radius - p.pos[:, 2]) / p.radius))
+    assert floor > 0 and info["overlap"]["floor"] == pytest.approx(floor, rel=1e-6)
+    assert info["overlap"]["floor"] <= info["overlap"]["largest"]
     dt = run["stable_step"]
     out = tmp_path / "x20"
     forced = st.relax_once(btr_binary, csv, engine, out, 1500 * dt, forced=20 * dt, time_limit=120,
@@ -70,10 +79,10 @@ def test_forced_step_blows_up_and_rule_step_is_stable(tmp_path, btr_binary, ligg
     assert forced["rc"] == 5, forced
     why = st.classify(forced["error"])
     assert why.startswith(("blow-up", "lost grains", "NaN", "grains outside")), forced["error"]
-    ok, why2 = st.forced_bounded(forced, 1e-9, 0.01, out)
+    ok, why2 = st.forced_bounded(forced, 1e-9, 0.01)
     assert not ok and why2 == why
     # the verdict of a run that blew up at its own step is "unstable"
-    assert st.rest_verdict(forced, str(out / "relaxed.csv"), 1e-12)[0] == "unstable"
+    assert st.rest_verdict(forced, 1e-12)[0] == "unstable"
 
 
 def test_soft_large_grains_are_outside_validity_with_the_hertz_overlap(tmp_path, btr_binary, liggghts):
@@ -85,7 +94,10 @@ def test_soft_large_grains_are_outside_validity_with_the_hertz_overlap(tmp_path,
     m = 2500 * 4 / 3 * math.pi * r ** 3
     assert pred["single"] == pytest.approx((3 * m * 9.81 / (4 * e_star * math.sqrt(r))) ** (2 / 3) / r, rel=1e-9)
     assert pred["column"] >= pred["single"]
-    run, (verdict, reason, info) = rest(btr_binary, csv, "liggghts", tmp_path / "rule", max_time=1.0)
+    # the pre-load is refused: at a quarter of a radius the law's overlaps push grains into their neighbours
+    pre, (verdict, reason, _) = rest(btr_binary, csv, "liggghts", tmp_path / "pre", max_time=1.0)
+    assert verdict == "refused" and "pre-loaded packing" in reason, reason
+    run, (verdict, reason, info) = rest(btr_binary, csv, "liggghts", tmp_path / "rule", max_time=1.0, preload=False)
     assert verdict == "outside validity", reason
     measured = info["overlap"]["largest"]
     assert measured > st.OVERLAP_BOUND
@@ -97,6 +109,17 @@ def test_liggghts_refuses_restitution_near_zero(tmp_path, btr_binary, liggghts):
     csv = tiny_case(tmp_path, btr_binary, "e0.05_mu1")
     run, (verdict, reason, _) = rest(btr_binary, csv, "liggghts", tmp_path / "rule")
     assert verdict == "refused" and "restitution" in reason, reason
+
+
+def test_rest_run_out_of_its_wall_time_is_not_at_rest(tmp_path, btr_binary, liggghts):
+    # a steel bed whose stop rule cannot fire (the probes' copy), 1 s simulated at ~1e-7 s per step, and a
+    # wall-time budget of 1 s: the engine is killed before the cap, a cost verdict, not "unstable"
+    csv = tiny_case(tmp_path, btr_binary, "steel")
+    never = btr_cli.variant(csv, tmp_path / "never", "btr", lambda sc: sc["relax"].update(
+        stop_rule="kinetic-energy", stop_kinetic_ratio=st.NEVER_STOP_RATIO))
+    run, (verdict, reason, _) = rest(btr_binary, never, "liggghts", tmp_path / "rule", max_time=1.0, time_limit=1.0)
+    assert run["rc"] == 5 and "wall-time limit" in run["error"], run["error"]
+    assert verdict == "not at rest", reason
 
 
 def test_find_edge_brackets_a_known_edge():
@@ -139,13 +162,28 @@ def test_stability_workflow_tiny(tmp_path, source_dir, btr_binary, liggghts, yad
     md = (out / "stability.md").read_text()
     assert md.count("\n| base |") == 2 and "restitution" in md
     assert (out / "stability.png").read_bytes()[:4] == b"\x89PNG"
+    assert {rows[("base", e)]["start"] for e in ("liggghts", "yade")} == {"preload"}
     run_json = json.loads((out / "run.json").read_text())
     assert run_json["status"] == "ok"
 
 
+def test_stability_workflow_falls_back_to_the_touching_start(tmp_path, source_dir, btr_binary, liggghts):
+    out = tmp_path / "soft"
+    p = subprocess.run([sys.executable, str(source_dir / "workflows" / "btr_workflow.py"), "stability", "--tiny",
+                        "--cases", "soft_large", "--engines", "liggghts", "-o", str(out)],
+                       capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, p.stdout + p.stderr
+    (row,) = json.loads((out / "stability.json").read_text())["rows"]
+    assert row["start"].startswith("touching (pre-load refused") and "pre-loaded packing" in row["start"], row
+    assert row["verdict"] == "outside validity" and row["edge"]["probes"], row
+    # the probes started from the touching packing too (no pre-loaded copy beside them)
+    probe_dirs = list((out / "cases" / "soft_large" / "liggghts").glob("forced_x*"))
+    assert probe_dirs and not any((d / "preloaded.csv").exists() for d in probe_dirs)
+
+
 def test_rest_run_out_of_wall_time_is_not_called_unstable():
     hung = {"rc": 5, "error": "btr relax: yade relaxation failed in X: killed after the wall-time limit (240 s)"}
-    assert st.rest_verdict(hung, "unused.csv", 1e-12)[0] == "not at rest"
+    assert st.rest_verdict(hung, 1e-12)[0] == "not at rest"
     blown = {"rc": 5, "error": "btr relax: ... kinetic energy grew to 3 J at t = 0.01 s ...: the run blew up"}
-    assert st.rest_verdict(blown, "unused.csv", 1e-12) == ("unstable", st.classify(blown["error"]), {})
+    assert st.rest_verdict(blown, 1e-12) == ("unstable", st.classify(blown["error"]), {})
     assert st.classify(blown["error"]).startswith("blow-up")

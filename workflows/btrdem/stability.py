@@ -1,10 +1,17 @@
 """`stability`: stiff and extreme cases run to rest in each engine, and the largest stable time step
 found by bisection, as a multiple of the coupling's rule (coupling/timestep.h).
 
+Every run starts pre-loaded (START: `btr relax --preload`, coupling/preload.h: each contact starts with
+the overlap that carries its static force, so a stiff bed starts near rest); if the pre-load is refused
+(its packing overlaps beyond the intended overlaps above --max-overlap, e.g. soft 5 cm grains whose
+law overlaps reach half a radius) the case runs from the touching start and its row says so.
+
 For every material case and engine:
-1. **Run to rest** at the rule's step: the run ends at its stop rule (kinetic energy) or at a
-   simulated-time cap of REST_FREE_FALL_TIMES free-fall times of the bed, sqrt(2 H / g) with H the
-   packing's top (never at a step cap). Verdict, one of
+1. **Run to rest** at the rule's step: the run ends at its stop rule (REST_STOP_RULE, unbalanced force:
+   with a pre-loaded start the kinetic rule arms after sqrt(2 delta_max / g), a few hundred steps of a
+   stiff bed, and fires before the grains have moved; the unbalanced force asks for static equilibrium)
+   or at a simulated-time cap of REST_FREE_FALL_TIMES free-fall times of the bed, sqrt(2 H / g) with H
+   the packing's top (never at a step cap). Verdict, one of
      stable            bounded, no overlap above the bound (at rest, or "not at rest" at the cap)
      unstable          numerically unstable: the engine blew up (kinetic energy above twice the energy the
                        packing holds), NaN, lost grains, grains outside, kinetic-energy growth
@@ -12,13 +19,15 @@ For every material case and engine:
                        contact model (small-overlap Hertz/Hooke) is outside its range; the predicted static
                        overlap of the same law is shown beside it (predicted_overlap)
      refused           the coupling refused the case before any engine ran (with its reason)
+     not at rest       the rest run used its wall-time budget first (a cost verdict, never unstable)
+   Overlaps are btr relax's own (relaxed.json: final_largest_overlap, final_largest_floor_overlap).
 2. **Find the edge**: `btr relax --force-timestep` (hidden, study only) at multiples m of the rule's
-   step over a window of WINDOW_STEPS rule steps from the same BTR packing: m = 2, 4, 8, ... up to
-   MAX_MULTIPLE until a run is unbounded, then bisection (geometric midpoints) between the last bounded
-   and the first unbounded multiple. Bounded: exit 0, kinetic energy not above GROWTH x the largest of
-   the rule-step run, largest overlap not above OVERLAP_GROWTH x the rule-step run's plus 0.01 radius.
-   The margin of the rule is the largest bounded multiple.
-Stiff cases use few grains (the pre-loaded start of the DEM-ready issue is not in this branch)."""
+   step over a window of WINDOW_STEPS rule steps from the same start as the rest run (pre-loaded or
+   touching) and a stop rule that never fires (every probe runs its whole window): m = 2, 4, 8, ... up
+   to MAX_MULTIPLE until a run is unbounded, then bisection (geometric midpoints) between the last
+   bounded and the first unbounded multiple. Bounded: exit 0, kinetic energy not above GROWTH x the
+   largest of the rule-step run, largest overlap not above OVERLAP_GROWTH x the rule-step run's plus
+   0.01 radius. The margin of the rule is the largest bounded multiple."""
 from __future__ import annotations
 
 import copy
@@ -32,7 +41,6 @@ import numpy as np
 
 from . import btr_cli, dem_params, report
 from .io import atomic_write_text, read_packing, write_json, write_scene_toml
-from .neighbours import touching_pairs
 from .runner import REPO, RunRecord, StepFailed, find_btr
 
 OVERLAP_BOUND = 0.05   # static overlap / smaller radius above which the contact law is outside its validity
@@ -40,6 +48,9 @@ REST_FREE_FALL_TIMES = 5.0
 GROWTH = 10.0          # forced run unbounded if its largest kinetic energy exceeds this x the rule run's
 OVERLAP_GROWTH = 2.0
 MAX_MULTIPLE = 64.0
+START = "preload"      # every run starts pre-loaded (btr relax --preload); touching if the pre-load is refused
+REST_STOP_RULE = "unbalanced-force"  # the rest run's stop rule (static equilibrium, see the module doc)
+NEVER_STOP_RATIO = 1e-200  # the probes' kinetic stop ratio: their stop rule never fires
 
 STEEL = {"young": 2e11, "poisson": 0.3}
 GLASS_BED = {  # the base: a small periodic bed of glass-density grains, radius 0.5-1 mm
@@ -75,9 +86,12 @@ def _case(name, what, count=None, density=None, radius=None, container=None, sou
 
 
 def build_cases(tiny: bool = False, full: bool = False) -> list:
-    """The material cases: one scene each. tiny: the fewest grains that still run; full: larger columns."""
+    """The material cases: one scene each. tiny: the fewest grains that still run; full: the 1e4-grain column."""
     n = 12 if tiny else 40
-    column = 30 if tiny else (1500 if full else 100)
+    # The tall steel column: 1000 grains in a 3 d x 3 d cell (about 100 d tall); --full: the issue's 1e4
+    # grains in a 6 d x 6 d cell (about 250 d tall: wider rather than 1000 d tall).
+    column = 30 if tiny else (10000 if full else 1000)
+    column_cell = 0.012 if full and not tiny else 0.006
     return [
         _case("base", "glass-density bed, E = 5e6 Pa, r 0.5-1 mm", count=n),
         _case("steel", "steel, E = 2e11 Pa, rho = 7800", count=n, density=7800.0, material=STEEL),
@@ -88,9 +102,10 @@ def build_cases(tiny: bool = False, full: bool = False) -> list:
               radius={"distribution": "constant", "value": 0.025}, container={"kind": "periodic", "size": [0.2, 0.2]}),
         _case("e0.05_mu1", "restitution 0.05, friction 1", count=n, material={"restitution": 0.05, "friction": 1.0}),
         _case("e0.1_mu1", "restitution 0.1, friction 1", count=n, material={"restitution": 0.1, "friction": 1.0}),
-        _case("steel_column", f"steel column of {column} grains (r = 1 mm, 3 d x 3 d cell)", count=column,
-              density=7800.0, material=STEEL, radius={"distribution": "constant", "value": 1.0e-3},
-              container={"kind": "periodic", "size": [0.006, 0.006]}),
+        _case("steel_column", f"steel column of {column} grains (r = 1 mm, {column_cell / 2e-3:g} d x "
+              f"{column_cell / 2e-3:g} d cell)", count=column, density=7800.0, material=STEEL,
+              radius={"distribution": "constant", "value": 1.0e-3},
+              container={"kind": "periodic", "size": [column_cell, column_cell]}),
         _case("hele_shaw_w1.1d", "Hele-Shaw cell, gap w = 1.1 d (r = 0.5 mm)", count=n,
               radius={"distribution": "constant", "value": 0.5e-3},
               container={"kind": "hele-shaw", "size": [0.02], "gap": 1.1e-3},
@@ -129,16 +144,11 @@ def predicted_overlap(p, scene: dict) -> dict:
             "column": delta(column_load) / r, "floor_grains": int(np.sum(on_floor))}
 
 
-def measured_overlap(csv: str) -> dict:
-    """Largest overlap / smaller radius in a relaxed packing: grain pairs and floor."""
-    p = read_packing(csv)
-    pairs, dist = touching_pairs(p.pos, p.radius, p.container(), tol=0.0)
-    worst = 0.0
-    if len(pairs):
-        ri, rj = p.radius[pairs[:, 0]], p.radius[pairs[:, 1]]
-        worst = float(np.max((ri + rj - dist) / np.minimum(ri, rj)))
-    floor = float(np.max(np.maximum(p.radius - p.pos[:, 2], 0.0) / p.radius))
-    return {"pairs": worst, "floor": floor, "largest": max(worst, floor)}
+def relaxed_overlap(relax: dict) -> dict:
+    """Largest overlap / smaller radius of the relaxed packing (grain pairs and every wall) and the
+    largest grain-floor overlap / that grain's radius, as `btr relax` measured them (relaxed.json,
+    coupling/overlap.h): one definition, in C++."""
+    return {"largest": float(relax["final_largest_overlap"]), "floor": float(relax["final_largest_floor_overlap"])}
 
 
 # ---------------------------------------------------------------- one engine run
@@ -173,11 +183,16 @@ def kinetic_history(outdir) -> np.ndarray:
     return a.reshape(-1, 2)
 
 
-def relax_once(btr, csv, engine, outdir, max_time, forced=None, time_limit=None, label=None, progress=print) -> dict:
+def relax_once(btr, csv, engine, outdir, max_time, forced=None, time_limit=None, label=None, progress=print,
+               preload=False, stop_rule=None) -> dict:
     """One `btr relax`; returns rc, stdout, error, stable step, relax record (on success), kinetic history."""
     extra = ["--max-time", repr(float(max_time))]
     if forced is not None:
         extra += ["--force-timestep", repr(float(forced))]
+    if preload:
+        extra += ["--preload"]
+    if stop_rule:
+        extra += ["--stop-rule", stop_rule]
     r = btr_cli.relax(btr, csv, engine, outdir, time_limit=time_limit, progress=progress, label=label or engine,
                       check=False, extra_args=extra)
     out = {"rc": r["returncode"], "wall_seconds": r["wall_seconds"], "error": r["error"] or "",
@@ -203,27 +218,35 @@ def energy_growth(kinetic: np.ndarray, threshold: float) -> str | None:
     return None
 
 
-def rest_verdict(run: dict, csv_relaxed: str | None, threshold: float) -> tuple[str, str, dict]:
+def _first_line(message: str | None) -> str:
+    return (message or "refused").strip().splitlines()[0].replace("btr relax: ", "") if (message or "").strip() \
+        else "refused"
+
+
+def rest_verdict(run: dict, threshold: float) -> tuple[str, str, dict]:
     """(verdict, reason, numbers) of the run at the rule's step."""
     if run["rc"] == 2:
-        return "refused", run["error"].splitlines()[0].replace("btr relax: ", "") if run["error"] else "refused", {}
+        return "refused", _first_line(run["error"]), {}
     if run["rc"] != 0:
         why = classify(run["error"])
         if why.startswith("engine hung"):  # at the rule's step this is the wall-time budget, not a blow-up
             return "not at rest", "wall-time limit reached before the stop rule or the time cap", {}
         return "unstable", why, {}
-    info = {"stop_reason": run["relax"]["stop_reason"], "simulated_time": run["relax"]["simulated_time"]}
+    rx = run["relax"]
+    info = {"stop_reason": rx["stop_reason"], "simulated_time": rx["simulated_time"],
+            "final_kinetic_ratio": float(rx["final_kinetic_energy"]) / threshold,
+            "final_unbalanced_force": rx.get("final_unbalanced_force")}
     grow = energy_growth(run["kinetic"], threshold)
     if grow:
         return "unstable", grow, info
-    ov = measured_overlap(csv_relaxed)
+    ov = relaxed_overlap(run["relax"])
     info["overlap"] = ov
     if ov["largest"] > OVERLAP_BOUND:
         return "outside validity", (f"static overlap {ov['largest']:.3g} of the smaller radius > {OVERLAP_BOUND:g}"), info
     return "stable", "", info
 
 
-def forced_bounded(run: dict, ref_max_kinetic: float, ref_overlap: float, outdir) -> tuple[bool, str]:
+def forced_bounded(run: dict, ref_max_kinetic: float, ref_overlap: float) -> tuple[bool, str]:
     """ref_max_kinetic: the larger of the rule-step run's largest kinetic energy and the stop threshold
     (a bed that hardly moves at the rule's step must not make round-off energies count as growth)."""
     if run["rc"] == 2:
@@ -235,7 +258,7 @@ def forced_bounded(run: dict, ref_max_kinetic: float, ref_overlap: float, outdir
         return False, "NaN"
     if len(e) and float(np.max(e)) > GROWTH * max(ref_max_kinetic, 1e-300):
         return False, f"kinetic energy {float(np.max(e)):.3g} J > {GROWTH:g} x the rule-step run's {ref_max_kinetic:.3g} J"
-    ov = measured_overlap(str(Path(outdir) / "relaxed.csv"))["largest"]
+    ov = relaxed_overlap(run["relax"])["largest"]
     if ov > OVERLAP_GROWTH * ref_overlap + 0.01:
         return False, f"overlap {ov:.3g} of the radius > {OVERLAP_GROWTH:g} x the rule-step run's {ref_overlap:.3g} + 0.01"
     return True, ""
@@ -283,26 +306,29 @@ def run_stability(outdir=None, engines=("liggghts", "yade"), tiny: bool = False,
     iterations = 1 if tiny else (4 if full else 2)
     window = 1500 if tiny else (8000 if full else 3000)
     time_limit = 60.0 if tiny else 240.0
-    rest_limit = 120.0 if tiny else (1800.0 if full else 240.0)
+    rest_limit = 120.0 if tiny else (1800.0 if full else 600.0)
     selected = build_cases(tiny, full) if cases is None else cases
     outdir.mkdir(parents=True, exist_ok=True)
     rec = RunRecord(outdir, "stability", btr=btr, progress=progress,
                     settings={"engines": list(engines), "tiny": tiny, "full": full, "cases": [c["name"] for c in selected],
                               "overlap_bound": OVERLAP_BOUND, "rest_free_fall_times": REST_FREE_FALL_TIMES,
                               "window_rule_steps": window, "bisection_iterations": iterations,
-                              "max_multiple": MAX_MULTIPLE, "growth": GROWTH})
+                              "max_multiple": MAX_MULTIPLE, "growth": GROWTH, "start": START,
+                              "rest_stop_rule": REST_STOP_RULE})
     rows = []
     # Rows of an earlier run of the same settings into this folder are kept (a restarted sweep goes on).
     earlier = {}
     previous = outdir / "stability.json"
     if previous.exists():
         old = json.loads(previous.read_text())
-        if old.get("window_rule_steps") == window:
+        if old.get("window_rule_steps") == window and old.get("start") == START and \
+                old.get("rest_stop_rule") == REST_STOP_RULE:
             earlier = {(r["case"], r["engine"]): r for r in old.get("rows", [])
                        if r.get("edge") or r.get("verdict") == "refused"}
 
     def write_tables(rows_so_far):
         res = {"engines": list(engines), "overlap_bound": OVERLAP_BOUND, "window_rule_steps": window,
+               "start": START, "rest_stop_rule": REST_STOP_RULE,
                "rest_free_fall_times": REST_FREE_FALL_TIMES, "max_multiple": MAX_MULTIPLE, "rows": rows_so_far,
                "summary": summary(rows_so_far)}
         write_json(outdir / "stability.json", res)
@@ -322,7 +348,12 @@ def run_stability(outdir=None, engines=("liggghts", "yade"), tiny: bool = False,
                 p = read_packing(dep["csv"])
                 sc = p.scene()
                 top = float(np.max(p.pos[:, 2] + p.radius))
-                built.update(csv=dep["csv"], grains=len(p), top=top,
+                # The probes' copy: the same packing whose stop rule never fires (kinetic-energy with a
+                # vanishing threshold), so that every probe runs its whole window.
+                probe_csv = btr_cli.variant(dep["csv"], cdir / "probe_input", "btr_probe",
+                                            lambda sc: sc["relax"].update(stop_rule="kinetic-energy",
+                                                                          stop_kinetic_ratio=NEVER_STOP_RATIO))
+                built.update(csv=dep["csv"], probe_csv=probe_csv, grains=len(p), top=top,
                              rest_time=REST_FREE_FALL_TIMES * math.sqrt(2.0 * top / dem_params.G),
                              threshold=dem_params.kinetic_threshold(p.radius, p.species, sc,
                                                                     float(sc["relax"]["stop_kinetic_ratio"])),
@@ -341,23 +372,35 @@ def run_stability(outdir=None, engines=("liggghts", "yade"), tiny: bool = False,
                 row.update(grains=c["grains"], rest_time_cap=c["rest_time"], predicted_overlap=c["predicted"])
                 edir = cdir / engine
                 rest = relax_once(btr, c["csv"], engine, edir / "rest", c["rest_time"], time_limit=rest_limit,
-                                  label="rest", progress=progress)
-                verdict, reason, info = rest_verdict(rest, str(edir / "rest" / "relaxed.csv"), c["threshold"])
-                row.update(verdict=verdict, reason=reason, stable_step=rest["stable_step"],
-                           wall_seconds=rest["wall_seconds"], **info)
+                                  label="rest", progress=progress, preload=START == "preload", stop_rule=REST_STOP_RULE)
+                start, wall = START, rest["wall_seconds"]
+                if START == "preload" and rest["rc"] == 2:
+                    # Refused: by the pre-load (e.g. overlaps beyond the intended ones), or by the case itself.
+                    # The touching start tells which; if only the pre-load was refused the case runs from it.
+                    touching = relax_once(btr, c["csv"], engine, edir / "rest_touching", c["rest_time"],
+                                          time_limit=rest_limit, label="rest", progress=progress,
+                                          stop_rule=REST_STOP_RULE)
+                    wall += touching["wall_seconds"]
+                    if touching["rc"] != 2:
+                        start = "touching (pre-load refused: " + _first_line(rest["error"]) + ")"
+                    rest = touching
+                verdict, reason, info = rest_verdict(rest, c["threshold"])
+                row.update(verdict=verdict, reason=reason, stable_step=rest["stable_step"], start=start,
+                           wall_seconds=wall, **info)
+                preload = start == "preload"
                 row["status"] = verdict
                 if verdict in ("refused",) or rest["stable_step"] is None:
                     continue
                 if verdict == "unstable":
                     ref_ke, ref_ov = c["threshold"], 0.0
                 elif verdict == "not at rest":  # the reference is the rule's step over the probes' window
-                    ref = relax_once(btr, c["csv"], engine, edir / "window_x1", window * rest["stable_step"],
-                                     time_limit=time_limit, label="x1", progress=progress)
+                    ref = relax_once(btr, c["probe_csv"], engine, edir / "window_x1", window * rest["stable_step"],
+                                     time_limit=time_limit, label="x1", progress=progress, preload=preload)
                     if ref["rc"] != 0:
                         row["reason"] += f"; the rule's step over the window failed too: {classify(ref['error'])}"
                         continue
                     ref_ke = max(float(np.max(ref["kinetic"][:, 1])) if len(ref["kinetic"]) else 0.0, c["threshold"])
-                    ref_ov = measured_overlap(str(edir / "window_x1" / "relaxed.csv"))["largest"]
+                    ref_ov = relaxed_overlap(ref["relax"])["largest"]
                 else:
                     ref_ke = max(float(np.max(rest["kinetic"][:, 1])) if len(rest["kinetic"]) else 0.0, c["threshold"])
                     ref_ov = info["overlap"]["largest"]
@@ -365,17 +408,18 @@ def run_stability(outdir=None, engines=("liggghts", "yade"), tiny: bool = False,
 
                 first_wall = []
 
-                def probe(m, edir=edir, c=c, dt=dt, ref_ke=ref_ke, ref_ov=ref_ov, engine=engine, first_wall=first_wall):
+                def probe(m, edir=edir, c=c, dt=dt, ref_ke=ref_ke, ref_ov=ref_ov, engine=engine, first_wall=first_wall,
+                          preload=preload):
                     # A probe has at most as many steps as the first one; YADE can hang after a blow-up (its
                     # collider), so a probe is killed at 4x the first probe's wall time (at least 20 s).
                     limit = max(20.0, 4.0 * first_wall[0]) if first_wall else time_limit
                     d = edir / f"forced_x{m:.4g}"
-                    r = relax_once(btr, c["csv"], engine, d, window * dt, forced=m * dt, time_limit=limit,
-                                   label=f"x{m:.4g}", progress=progress)
+                    r = relax_once(btr, c["probe_csv"], engine, d, window * dt, forced=m * dt, time_limit=limit,
+                                   label=f"x{m:.4g}", progress=progress, preload=preload)
                     if not first_wall:
                         first_wall.append(r["wall_seconds"])
                     row["wall_seconds"] += r["wall_seconds"]
-                    return forced_bounded(r, ref_ke, ref_ov, d)
+                    return forced_bounded(r, ref_ke, ref_ov)
 
                 if verdict == "unstable":  # the rule's own step is not bounded: look below it
                     edge = {"largest_bounded": None, "smallest_unbounded": 1.0, "unbounded_reason": reason,
@@ -481,25 +525,38 @@ def margin_figure(path, rows, engines) -> str:
 
 
 def markdown(res: dict, fig_name: str) -> str:
-    headers = ["case", "engine", "grains", "verdict at the rule's step", "reason", "stop", "largest overlap / r",
+    headers = ["case", "engine", "grains", "start", "verdict at the rule's step", "reason", "stop (t [s]; final E / threshold; "
+               "unbalanced force)", "largest overlap / r (floor)",
                "predicted static overlap / r (1 grain; column)", "rule step [s]", "margin (largest bounded multiple)",
                "unbounded because", "wall [s]"]
-    table = []
+    table, notes = [], []
     for r in res["rows"]:
+        start = r.get("start", "-")
+        if start.startswith("touching (pre-load refused: "):  # the reason goes under the table
+            notes.append(f"- {r['case']} / {r['engine']}: {start[len('touching ('):-1]}")
+            start = "touching (pre-load refused)"
         pred = r.get("predicted_overlap")
-        ov = (r.get("overlap") or {}).get("largest")
+        ov = r.get("overlap") or {}
         e = r.get("edge") or {}
-        table.append([r["case"], r["engine"], r.get("grains", "-"), r.get("verdict", r["status"]), r["reason"] or "-",
-                      r.get("stop_reason", "-"), f"{ov:.3g}" if ov is not None else "-",
+        stop = "-"
+        if r.get("stop_reason"):
+            uf = r.get("final_unbalanced_force")
+            stop = (f"{r['stop_reason']} ({r['simulated_time']:.3g}; {r['final_kinetic_ratio']:.3g}; "
+                    + (f"{uf:.2g})" if uf is not None else "-)"))
+        table.append([r["case"], r["engine"], r.get("grains", "-"), start, r.get("verdict", r["status"]),
+                      r["reason"] or "-", stop,
+                      f"{ov['largest']:.3g} ({ov['floor']:.3g})" if ov else "-",
                       f"{pred['single']:.3g}; {pred['column']:.3g} ({pred['law']})" if pred else "-",
                       f"{r['stable_step']:.3g}" if r.get("stable_step") else "-", _margin_text(r),
                       e.get("unbounded_reason") or "-", f"{r['wall_seconds']:.1f}"])
     return "\n".join([
         "# Stability sweep: run to rest, and the edge of the time step", "",
-        f"Each case runs at the rule's step to its stop rule or {res['rest_free_fall_times']:g} free-fall times of the "
+        f"Each case runs at the rule's step from a {res.get('start', START)} start to its stop rule "
+        f"({res.get('rest_stop_rule', REST_STOP_RULE)}) or {res['rest_free_fall_times']:g} free-fall times of the "
         f"bed. Verdicts: stable; unstable (blow-up, NaN, lost grains, grains outside, energy growth); outside validity "
         f"(static overlap above {res['overlap_bound']:g} of the smaller radius, with the contact law's predicted "
         "static overlap beside it); refused (with the coupling's reason). The edge: forced steps of m x the rule's "
         f"step over {res['window_rule_steps']} rule steps, doubled then bisected; bounded = exit 0, kinetic energy "
         f"at most {GROWTH:g} x the rule-step run's, overlap bounded.", "", "## Summary", "", res["summary"], "",
-        "## Cases", "", report.md_table(headers, table), f"![stable-step margin]({fig_name})", ""])
+        "## Cases", "", report.md_table(headers, table), *(["", "Started touching:", *notes, ""] if notes else []),
+        f"![stable-step margin]({fig_name})", ""])
