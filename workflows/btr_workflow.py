@@ -8,7 +8,7 @@
   stability [-o OUTDIR] [--tiny|--full]   stiff/extreme cases run to rest; stable-step margin by bisection
   brazil-nut [-o OUTDIR] [--tiny]         intruder rise under dynamic BTR shaking, Phi sweep, 3D and 2D
   drum [-o OUTDIR] [--revolutions N]      segregation and dynamic angle in a rotating drum (2D, 3D)
-  hele-shaw [-o OUTDIR] [--reduced|--tiny] angle of repose in Hele-Shaw cells (seed 003): DEM, BTR, BTR + relax
+  hele-shaw [-o OUTDIR] [--reduced|--tiny] angle of repose in Hele-Shaw cells (seed 003): DEM, BTR, BTR + relax, BTR + ub-relax
   nano-powder [-o OUTDIR] [--cycles N]    rigid clusters redeposited: <h> = a - b exp(-n/tau) (2D, 3D)
 
 The `btr` program is $BTR_BINARY, else build/app/btr. Exit status: 0 done, 2 bad input, 3 a step failed
@@ -144,7 +144,7 @@ def main(argv=None) -> int:
     dr.add_argument("--revolutions", type=float, default=3.0)
     dr.add_argument("--tiny", action="store_true", help="300 grains, 20 steps per revolution, one revolution")
 
-    hs = sub.add_parser("hele-shaw", help="angle of repose in Hele-Shaw cells (seed 003): DEM vs BTR vs BTR + relax")
+    hs = sub.add_parser("hele-shaw", help="angle of repose in Hele-Shaw cells (seed 003): DEM vs BTR vs BTR + relax vs BTR + unbalanced-force relax")
     hs.add_argument("-o", "--out", help="output folder (default out/hele_shaw)")
     hs.add_argument("--reduced", action="store_true", help="3 N values, 6 widths, 3 widths for the second size, "
                                                          "cell 40 d (under 30 min on a quiet machine)")
