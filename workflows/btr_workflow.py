@@ -146,9 +146,9 @@ def main(argv=None) -> int:
 
     hs = sub.add_parser("hele-shaw", help="angle of repose in Hele-Shaw cells (seed 003): DEM vs BTR vs BTR + relax vs BTR + unbalanced-force relax")
     hs.add_argument("-o", "--out", help="output folder (default out/hele_shaw)")
-    hs.add_argument("--reduced", action="store_true", help="3 N values, 6 widths, 3 widths for the second size, "
-                                                         "cell 40 d (under 30 min on a quiet machine)")
-    hs.add_argument("--tiny", action="store_true", help="one cell of 40 grains (for tests)")
+    hs.add_argument("--reduced", action="store_true", help="4 N values, 9 widths (1.5-30 d), 4 widths for the second "
+                                                         "size, cell 70 d (20 min measured on 2 shared cores)")
+    hs.add_argument("--tiny", action="store_true", help="one cell of 120 grains, w = 3 d (for tests)")
     hs.add_argument("--pace", type=float, default=1.0,
                     help="pour rate: batch interval / batch free-fall time (smaller pours faster)")
     hs.add_argument("--n", type=int, help="grains at w = 3 d (skips the theta-against-N sweep)")

@@ -11,6 +11,7 @@ import sys
 import numpy as np
 
 from btrdem import hele_shaw
+from btrdem.runner import StepFailed
 
 
 def _matrix(script: str, name: str) -> list:
@@ -177,3 +178,29 @@ def test_scatter_summary_on_known_angles():
     assert fit["points"] == 17 and fit["determined"]
     assert abs(fit["theta_inf"] - 20.0) < 1.0 and abs(fit["l_d"] - 4.0) < 1.5, fit
     assert fits["w >= 5 d"][0]["points"] == 13
+
+
+def test_dem_scatter_records_a_failed_pour_and_finishes(tmp_path, btr_binary, monkeypatch):
+    """A pour that fails is a row with its reason; the other pours run, and the tables are written with them."""
+    monkeypatch.setenv("BTR_BINARY", btr_binary)
+    angle = {1.5: 26.0, 3: 25.0, 5: 24.0, 7: 22.0, 10: 20.0}
+
+    def fake_case(btr, case_dir, scene, methods, pace, progress):
+        w = float(case_dir.name[1:])
+        if w == 7:
+            def fail():
+                raise StepFailed("pour w7: LIGGGHTS exited with status 1")
+            return {"dem": fail}
+        return {"dem": lambda: (str(w), 1.0, "max-time")}
+
+    monkeypatch.setattr(hele_shaw, "_run_case", fake_case)
+    monkeypatch.setattr(hele_shaw, "_measure", lambda csv_path: {"theta": angle[float(csv_path)], "z_mean": 4.0,
+                                                               "heap_note": "", "profile": None})
+    rows, per_width, _ = hele_shaw.dem_scatter(tmp_path / "sc", [2], [1.5, 3, 5, 7, 10], progress=lambda m: None)
+    assert [r["status"] for r in rows] == ["ok", "ok", "ok", "fail", "ok"]
+    assert "LIGGGHTS exited with status 1" in rows[3]["reason"]
+    assert [p["w_d"] for p in per_width] == [1.5, 3, 5, 10]  # the failed pour is not averaged
+    saved = list(csv.DictReader(open(tmp_path / "sc" / "dem_scatter.csv")))
+    assert [r["status"] for r in saved] == ["ok", "ok", "ok", "fail", "ok"]
+    assert "Failed pours: seed 2 w = 7 d" in (tmp_path / "sc" / "dem_scatter.md").read_text()
+    assert json.loads((tmp_path / "sc" / "run.json").read_text())["summary"]["failed"] == 1

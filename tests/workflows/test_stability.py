@@ -174,7 +174,7 @@ def test_stability_workflow_falls_back_to_the_touching_start(tmp_path, source_di
                        capture_output=True, text=True, timeout=600)
     assert p.returncode == 0, p.stdout + p.stderr
     (row,) = json.loads((out / "stability.json").read_text())["rows"]
-    assert row["start"].startswith("touching (pre-load refused") and "pre-loaded packing" in row["start"], row
+    assert row["start"] == "touching (pre-load refused)" and "pre-loaded packing" in row["preload_refused"], row
     assert row["verdict"] == "outside validity" and row["edge"]["probes"], row
     # the probes started from the touching packing too (no pre-loaded copy beside them)
     probe_dirs = list((out / "cases" / "soft_large" / "liggghts").glob("forced_x*"))

@@ -153,19 +153,15 @@ def _run_case(btr, case_dir: Path, scene: dict, methods, pace: float, progress) 
     def btr_only():
         return get_btr()
 
-    def relaxed():
+    def relaxed(folder, label, extra_args=()):
         csv_path, t_btr, _ = get_btr()
-        r = btr_cli.relax(btr, csv_path, "liggghts", case_dir / "relax", progress=progress)
+        r = btr_cli.relax(btr, csv_path, "liggghts", case_dir / folder, progress=progress, label=label,
+                          extra_args=extra_args)
         return r["csv"], t_btr + r["wall_seconds"], _stop_reason(r["csv"])
 
-    def ub_relaxed():
-        csv_path, t_btr, _ = get_btr()
-        cap = UB_RELAX_CAP * float(scene["relax"]["max_time"])
-        r = btr_cli.relax(btr, csv_path, "liggghts", case_dir / "relax_ub", progress=progress, label="relax-ub",
-                          extra_args=UB_RELAX_ARGS + ("--max-time", repr(cap)))
-        return r["csv"], t_btr + r["wall_seconds"], _stop_reason(r["csv"])
-
-    steps = {"dem": dem, "btr": btr_only, "btr+relax": relaxed, "btr+ub-relax": ub_relaxed}
+    ub_args = UB_RELAX_ARGS + ("--max-time", repr(UB_RELAX_CAP * float(scene["relax"]["max_time"])))
+    steps = {"dem": dem, "btr": btr_only, "btr+relax": lambda: relaxed("relax", "relax"),
+             "btr+ub-relax": lambda: relaxed("relax_ub", "relax-ub", ub_args)}
     return {m: steps[m] for m in methods}
 
 
@@ -403,6 +399,7 @@ def _scatter_summary(rows: list) -> tuple:
     """Per width: the DEM angles of every seed, their mean and sample standard deviation; Eq. 9 fitted to
     every pour (all seeds as points: the fit's errors then carry the pour-to-pour scatter), over all widths
     and from w >= 5 d. rows: dicts with seed, w_d, theta_deg."""
+    rows = [r for r in rows if r.get("status", "ok") == "ok"]
     by_w = {}
     for r in rows:
         by_w.setdefault(float(r["w_d"]), []).append(float(r["theta_deg"]))
@@ -418,14 +415,18 @@ def _scatter_summary(rows: list) -> tuple:
 def dem_scatter(outdir, seeds, widths, reference_csv=None, d_mm: float = 1.0, pace: float = 1.0, progress=print):
     """Pour-to-pour scatter of the DEM angle: the reduced study's cells (d = d_mm, N = 800 w / 3d) poured with
     other seeds (the seed moves the pour's initial lattice and jitter), beside the seed-1 rows of
-    reference_csv (a hele_shaw.csv). A case whose dem/poured.csv exists is reused. Writes dem_scatter.csv and
-    dem_scatter.md into outdir. Usage (README, "Hele-Shaw heaps"):
+    reference_csv (a hele_shaw.csv). Each pour is a case (RunRecord.case: a failure is a row with its reason);
+    a case whose dem/poured.csv exists is reused. dem_scatter.csv and dem_scatter.md in outdir are rewritten
+    after every pour. Usage (README, "Hele-Shaw heaps"):
       cd workflows && /usr/bin/python3 -c "from btrdem.hele_shaw import dem_scatter; dem_scatter('../out/hand',
           [2, 3], [1.5, 3, 5, 7, 10, 15, 20, 30], '../docs/hele_shaw/hele_shaw.csv')"
     """
     out = Path(outdir).resolve()
     btr = find_btr()
     base = read_scene_toml(BASE)
+    rec = RunRecord(out, "hele-shaw DEM scatter", inputs=[str(BASE)], btr=btr, progress=progress,
+                    settings={"seeds": list(seeds), "widths": list(widths), "d_mm": d_mm, "pace": pace,
+                              "reference_csv": str(reference_csv) if reference_csv else None})
     rows = []
     if reference_csv:
         for r in csv.DictReader(open(reference_csv)):
@@ -433,27 +434,36 @@ def dem_scatter(outdir, seeds, widths, reference_csv=None, d_mm: float = 1.0, pa
                     and float(r["w_d"]) in [float(w) for w in widths]):
                 rows.append({"seed": 1, "w_d": float(r["w_d"]), "n": int(r["n"]), "theta_deg": float(r["theta_deg"]),
                              "z_mean": float(r["z_mean"]), "wall_s": float(r["wall_s"]), "stop": r["stop"],
-                             "source": str(reference_csv)})
+                             "source": str(reference_csv), "status": "ok", "reason": ""})
     for seed in seeds:
         for w in widths:
             n = int(round(REDUCED["n_values"][2] * w / 3.0))
             case = out / f"seed{seed}" / f"w{w:g}"
-            done = case / "dem" / "pour_summary.json"
-            if done.exists() and (case / "dem" / "poured.csv").exists():
-                s = json.loads(done.read_text())
-                csv_path, wall, stop = str(case / "dem" / "poured.csv"), s["wall_seconds"], s["stop_reason"]
-                if int(s.get("seed", -1)) != int(seed):
-                    raise RuntimeError(f"{done}: poured with seed {s.get('seed')}, not {seed}")
-            else:
-                scene = cell_scene(base, d_mm * 1e-3, float(w), n, REDUCED, int(seed))
-                csv_path, wall, stop = _run_case(btr, case, scene, ("dem",), pace, progress)["dem"]()
-            m = _measure(csv_path)
-            rows.append({"seed": seed, "w_d": float(w), "n": n, "theta_deg": m["theta"], "z_mean": m["z_mean"],
-                         "wall_s": wall, "stop": stop, "source": str(case)})
-            progress(f"seed {seed} w = {w:g} d: theta {m['theta']:.2f} deg, z {m['z_mean']:.3f}, {wall:.1f} s, {stop}")
-    keys = ["seed", "w_d", "n", "theta_deg", "z_mean", "wall_s", "stop", "source"]
+            row = {"seed": seed, "w_d": float(w), "n": n, "source": str(case)}
+            with rec.case(f"DEM pour seed {seed} w = {w:g} d", rows, row, lambda rows: _write_scatter(out, rows, d_mm)):
+                done = case / "dem" / "pour_summary.json"
+                if done.exists() and (case / "dem" / "poured.csv").exists():
+                    s = json.loads(done.read_text())
+                    csv_path, wall, stop = str(case / "dem" / "poured.csv"), s["wall_seconds"], s["stop_reason"]
+                    if int(s.get("seed", -1)) != int(seed):
+                        raise RuntimeError(f"{done}: poured with seed {s.get('seed')}, not {seed}")
+                else:
+                    scene = cell_scene(base, d_mm * 1e-3, float(w), n, REDUCED, int(seed))
+                    csv_path, wall, stop = _run_case(btr, case, scene, ("dem",), pace, progress)["dem"]()
+                m = _measure(csv_path)
+                if m["theta"] is None:
+                    raise RuntimeError(f"heap angle not measured: {m['heap_note']}")
+                row.update(theta_deg=m["theta"], z_mean=m["z_mean"], wall_s=wall, stop=stop)
+    per_width, fits = _write_scatter(out, rows, d_mm)
+    rec.finish({"pours": len(rows), "failed": sum(r["status"] != "ok" for r in rows)})
+    return rows, per_width, fits
+
+
+def _write_scatter(out: Path, rows: list, d_mm: float):
+    """dem_scatter.csv (every row, failed ones with their reason) and dem_scatter.md (per width, Eq. 9)."""
+    keys = ["seed", "w_d", "n", "theta_deg", "z_mean", "wall_s", "stop", "source", "status", "reason"]
     atomic_write_text(out / "dem_scatter.csv", ",".join(keys) + "\n" + "".join(
-        ",".join(str(r[k]) for k in keys) + "\n" for r in rows))
+        ",".join(str(r.get(k, "")) for k in keys) + "\n" for r in rows))
     per_width, fits = _scatter_summary(rows)
     md = [f"# DEM angle, pour-to-pour scatter (d = {d_mm:g} mm, seeds {sorted({r['seed'] for r in rows})})", "",
           "| w/d | theta per seed [deg] | mean | std |", "|---|---|---|---|"]
@@ -466,5 +476,8 @@ def dem_scatter(outdir, seeds, widths, reference_csv=None, d_mm: float = 1.0, pa
                                   f"{fit['alpha']:.3f} +- {fit['alpha_err']:.3f}, l = {fit['l_d']:.2f} +- "
                                   f"{fit['l_d_err']:.2f} d (rms {fit['rms_deg']:.2f} deg, {fit['points']} pours)"
                                   + ("" if fit["determined"] else "; not determined") if fit else f"not fitted: {why}"))
+    failed = [r for r in rows if r["status"] != "ok"]
+    if failed:
+        md += ["", "Failed pours: " + "; ".join(f"seed {r['seed']} w = {r['w_d']:g} d: {r['reason']}" for r in failed)]
     atomic_write_text(out / "dem_scatter.md", "\n".join(md) + "\n")
-    return rows, per_width, fits
+    return per_width, fits

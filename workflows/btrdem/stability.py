@@ -219,8 +219,8 @@ def energy_growth(kinetic: np.ndarray, threshold: float) -> str | None:
 
 
 def _first_line(message: str | None) -> str:
-    return (message or "refused").strip().splitlines()[0].replace("btr relax: ", "") if (message or "").strip() \
-        else "refused"
+    text = (message or "").strip()
+    return text.splitlines()[0].replace("btr relax: ", "") if text else "refused"
 
 
 def rest_verdict(run: dict, threshold: float) -> tuple[str, str, dict]:
@@ -373,7 +373,7 @@ def run_stability(outdir=None, engines=("liggghts", "yade"), tiny: bool = False,
                 edir = cdir / engine
                 rest = relax_once(btr, c["csv"], engine, edir / "rest", c["rest_time"], time_limit=rest_limit,
                                   label="rest", progress=progress, preload=START == "preload", stop_rule=REST_STOP_RULE)
-                start, wall = START, rest["wall_seconds"]
+                start, preload_refused, wall = START, None, rest["wall_seconds"]
                 if START == "preload" and rest["rc"] == 2:
                     # Refused: by the pre-load (e.g. overlaps beyond the intended ones), or by the case itself.
                     # The touching start tells which; if only the pre-load was refused the case runs from it.
@@ -382,11 +382,11 @@ def run_stability(outdir=None, engines=("liggghts", "yade"), tiny: bool = False,
                                           stop_rule=REST_STOP_RULE)
                     wall += touching["wall_seconds"]
                     if touching["rc"] != 2:
-                        start = "touching (pre-load refused: " + _first_line(rest["error"]) + ")"
+                        start, preload_refused = "touching (pre-load refused)", _first_line(rest["error"])
                     rest = touching
                 verdict, reason, info = rest_verdict(rest, c["threshold"])
                 row.update(verdict=verdict, reason=reason, stable_step=rest["stable_step"], start=start,
-                           wall_seconds=wall, **info)
+                           preload_refused=preload_refused, wall_seconds=wall, **info)
                 preload = start == "preload"
                 row["status"] = verdict
                 if verdict in ("refused",) or rest["stable_step"] is None:
@@ -532,9 +532,8 @@ def markdown(res: dict, fig_name: str) -> str:
     table, notes = [], []
     for r in res["rows"]:
         start = r.get("start", "-")
-        if start.startswith("touching (pre-load refused: "):  # the reason goes under the table
-            notes.append(f"- {r['case']} / {r['engine']}: {start[len('touching ('):-1]}")
-            start = "touching (pre-load refused)"
+        if r.get("preload_refused"):  # the reason goes under the table
+            notes.append(f"- {r['case']} / {r['engine']}: pre-load refused: {r['preload_refused']}")
         pred = r.get("predicted_overlap")
         ov = r.get("overlap") or {}
         e = r.get("edge") or {}
