@@ -11,6 +11,7 @@
 #include "btr/metrics.h"
 #include "btr/run_scene.h"
 #include "btr/scene_toml.h"
+#include "btr/size_budget.h"
 #include "command_support.h"
 #include "commands.h"
 #include "coupling/force_io.h"
@@ -41,6 +42,7 @@ int run(const Options& o, const CLI::App& cmd) {
   btr::Scene scene = btr::load_scene(o.scene);
   const std::uint64_t seed = cmd.count("--seed") ? o.seed : scene.seed;
   const std::int64_t count = cmd.count("--count") ? o.count : scene.grains.count;
+  if (cmd.count("--count")) btr::check_count_fits(scene, count, "--count");
   const std::string name = output_name(o.name, scene);
   scene.seed = seed;  // the stored scene rebuilds exactly this packing
   scene.grains.count = count;

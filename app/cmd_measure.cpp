@@ -8,23 +8,13 @@
 
 #include "btr/metrics.h"
 #include "btr/scene_toml.h"
+#include "coupling/atomic_file.h"
 #include "commands.h"
 #include "load_packing.h"
 #include "measures_json.h"
 
 namespace btr_app {
 namespace {
-
-void write_text_atomically(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp, std::ios::binary);
-    if (!f) throw std::runtime_error(path + ": cannot write");
-    f << text;
-    if (!f.flush()) throw std::runtime_error(path + ": write failed");
-  }
-  std::filesystem::rename(tmp, path);
-}
 
 std::string per_grain_csv(const btr::Grains& grains, int dimension, const btr::PackingMeasures& m) {
   const std::vector<double> depth = btr::surface_depth(grains, dimension);
@@ -90,8 +80,8 @@ Runner add_measure_command(CLI::App& app) {
       const btr::PackingMeasures m = measure_in_scene(p.packing.grains, sc, o->metrics);
       const std::string text = measures_to_json(m).dump(1) + "\n";
       if (o->out.empty()) std::cout << text;
-      else write_text_atomically(o->out, text);
-      if (!o->per_grain.empty()) write_text_atomically(o->per_grain, per_grain_csv(p.packing.grains, sc.dimension, m));
+      else btr::write_text_file(o->out, text);
+      if (!o->per_grain.empty()) btr::write_text_file(o->per_grain, per_grain_csv(p.packing.grains, sc.dimension, m));
       return kSuccess;
     } catch (const std::exception& e) {
       std::cerr << "btr measure: " << e.what() << "\n";

@@ -16,7 +16,7 @@
 #include "command_support.h"
 #include "commands.h"
 #include "coupling/scene_json.h"
-#include "coupling/text_file.h"
+#include "coupling/atomic_file.h"
 #include "series_files.h"
 
 namespace btr_app {

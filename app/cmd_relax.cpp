@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "commands.h"
+#include "coupling/process.h"
 #include "coupling/relax.h"
 #include "load_packing.h"
 #include "measures_json.h"
@@ -27,6 +28,10 @@ Runner add_relax_command(CLI::App& app) {
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand("relax", "Relax a packing in LIGGGHTS or YADE and read the result back");
+  cmd->footer(
+      "Exit codes: 0 ok, 2 bad input, 5 the engine failed, 6 --target-phi not reached (the relaxed packing is "
+      "written), 128+N stopped by signal N (SIGTERM, SIGINT, SIGHUP: the engine and every process it started are "
+      "ended first).");
   cmd->add_option("packing", o->packing, "PACKING.csv (the scene is read from PACKING.json beside it)")
       ->required()
       ->check(CLI::ExistingFile);
@@ -116,7 +121,17 @@ Runner add_relax_command(CLI::App& app) {
         std::cout << "open floor: " << r.removed.size() << " grain(s) left the region and were removed\n";
       std::cout
                 << "wrote " << o->out << "/relaxed.csv (.json, .vtp), kinetic.csv, contacts.csv, velocities.csv\n";
+      const nlohmann::json& target = r.relaxed.meta.contains("target_phi") ? r.relaxed.meta["target_phi"]
+                                                                            : nlohmann::json();
+      if (target.is_object() && target.value("reached", true) == false) {
+        std::cerr << "btr relax: the target packing fraction " << target.value("target", 0.0)
+                  << " was not reached (relaxed.json, target_phi); the relaxed packing is written\n";
+        return kTargetNotReached;
+      }
       return kSuccess;
+    } catch (const btr::Interrupted& e) {
+      std::cerr << "btr relax: " << e.what() << "\n";
+      return interrupted_exit_code(e.signal());
     } catch (const btr::EngineFailure& e) {
       std::cerr << "btr relax: " << e.what() << "\n";
       return kEngineFailed;

@@ -13,14 +13,19 @@
 
 namespace btr_app {
 
-// Runs `body` (which returns an exit code); a SceneError becomes kBadInput, a PlacementError or any other
-// exception kInternalFailure, each with one line "btr COMMAND: ..." on stderr.
+// Runs `body` (which returns an exit code); a SceneError or a full container (more grains than it holds)
+// becomes kBadInput, a PlacementError or any other exception kInternalFailure, each with one line
+// "btr COMMAND: ..." on stderr.
 template <class Body>
 int run_reporting_errors(const char* command, Body&& body) {
   try {
     return body();
   } catch (const btr::SceneError& e) {
     std::cerr << "btr " << command << ": " << e.what() << "\n";
+    return kBadInput;
+  } catch (const btr::ContainerFull& e) {
+    std::cerr << "btr " << command << ": grains.count: expected at most " << e.grain_id() - 1
+              << " grains, the number the drum held when it was full (" << e.what() << ")\n";
     return kBadInput;
   } catch (const btr::PlacementError& e) {
     std::cerr << "btr " << command << ": placement failed: " << e.what() << "\n";

@@ -5,8 +5,19 @@
 
 namespace btr_app {
 
-// Exit codes shared by every subcommand.
-enum ExitCode { kSuccess = 0, kBadInput = 2, kInternalFailure = 3, kCheckFailed = 4, kEngineFailed = 5 };
+// Exit codes shared by every subcommand (README, "Exit codes").
+enum ExitCode {
+  kSuccess = 0,
+  kBadInput = 2,
+  kInternalFailure = 3,
+  kCheckFailed = 4,
+  kEngineFailed = 5,
+  kTargetNotReached = 6,  // the run ended and wrote its result, but not what was asked (relaxed.json says which)
+};
+
+// Stopped by a signal while an engine ran (the engine and what it started were ended): 128 + the signal, as a
+// shell reports a process the signal ended.
+inline int interrupted_exit_code(int signal) { return 128 + signal; }
 
 // A registered subcommand: `run` is called when the user chose it, and returns the exit code.
 using Runner = std::function<int()>;

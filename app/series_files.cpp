@@ -7,7 +7,7 @@
 #include "btr/check.h"
 #include "command_support.h"
 #include "coupling/packing_io.h"
-#include "coupling/text_file.h"
+#include "coupling/atomic_file.h"
 
 namespace btr_app {
 

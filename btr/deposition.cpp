@@ -397,7 +397,7 @@ void Deposition::Impl::drum_start(Vec3& x, double z, double r) const {
   }
   std::ostringstream why;
   why << "no room in the drum for a grain dropped at x = " << x0 << ": the grains already placed fill it";
-  throw PlacementError(static_cast<std::int64_t>(grains.size()) + 1, why.str());
+  throw ContainerFull(static_cast<std::int64_t>(grains.size()) + 1, why.str());
 }
 
 // At rest on the drum wall: alone or with an end wall (gravity balanced only on the lowest line), or

@@ -35,6 +35,13 @@ class PlacementError : public std::runtime_error {
   std::int64_t grain_id_;
 };
 
+// A closed container (the drum) has no room left for the grain: the scene asks for more grains than it
+// holds, a fault of the input rather than of the placement.
+class ContainerFull : public PlacementError {
+ public:
+  using PlacementError::PlacementError;
+};
+
 class Deposition {
  public:
   // r_max bounds every radius that will be placed (it sizes the neighbour grid).

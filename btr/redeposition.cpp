@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <numeric>
 #include <stdexcept>
@@ -10,6 +11,7 @@
 #include "btr/cluster.h"
 #include "btr/cluster_list.h"
 #include "btr/deposition.h"
+#include "btr/scene_toml.h"
 #include "btr/drops.h"
 #include "btr/metrics.h"
 
@@ -29,6 +31,12 @@ struct UnionFind {
     if (a != b) parent[std::max(a, b)] = std::min(a, b);
   }
 };
+
+std::string g6(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", v);
+  return text;
+}
 
 double uniform(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
 
@@ -99,9 +107,11 @@ Grains Redeposition::drop_all(const std::vector<ClusterShape>& shapes) {
     const double e = c.kind == ContainerKind::Periodic ? 0.0 : shape.extent();
     auto coordinate = [&](double size, const char* axis) {
       if (size - 2.0 * e < 0.0)
-        throw std::runtime_error(scene_.file + ": a cluster of " + std::to_string(shape.size()) + " grains (extent " +
-                                 std::to_string(e) + " m) does not fit the container's " + axis +
-                                 " size: make [clusters].block smaller or the container wider");
+        throw SceneError(scene_.file + ": container.size: a cluster of " + std::to_string(shape.size()) +
+                         " grains (extent " + g6(e) + " m) does not fit the container's " + axis + " size (" + g6(size) +
+                         " m); expected a wider container or smaller clusters "
+                         "(clusters.size or clusters.file, and clusters.block = " +
+                         g6(scene_.clusters->block) + " mean diameters for those cut from the deposit)");
       return -0.5 * size + e + uniform(rng_) * (size - 2.0 * e);
     };
     d.x = coordinate(c.size_x, "x");

@@ -6,6 +6,7 @@
 
 #include "btr/deposition.h"
 #include "btr/drops.h"
+#include "btr/scene_toml.h"
 
 namespace btr {
 
@@ -20,7 +21,13 @@ RunResult run_scene(const Scene& scene, std::uint64_t seed, std::int64_t count,
   const std::int64_t total = drops.count();
   constexpr std::int64_t kProgressEvery = 256;
   for (std::int64_t i = 0; i < total; ++i) {
-    deposition.place(drops.next());
+    try {
+      deposition.place(drops.next());
+    } catch (const ContainerFull& e) {
+      throw SceneError(s.file + ": grains.count = " + std::to_string(count) + ": expected at most " +
+                       std::to_string(e.grain_id() - 1) + " grains, as many as the drum held when it was full (" +
+                       e.what() + ")");
+    }
     if (progress && (i + 1) % kProgressEvery == 0) progress(i + 1, total);
   }
   if (progress) progress(total, total);

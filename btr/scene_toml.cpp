@@ -13,6 +13,8 @@
 
 #include "btr/cluster_list.h"
 #include "btr/drop_list.h"
+#include "btr/scene_limits.h"
+#include "btr/size_budget.h"
 #include "btr/toml_reader.h"
 
 namespace btr {
@@ -53,8 +55,16 @@ class SceneParser {
     parse_shaking();
     parse_drum();
     parse_clusters();
+    if (auto p = scene_value_problem(scene_, FieldNames::Toml)) {
+      const toml::node* n = root_.tbl->at_path(p->field).node();
+      rd_.fail(n ? Reader::line_of(*n) : 0, p->message);
+    }
     check_container_holds_grains(container);
     check_source_fits(source);
+    check_grid_fits(container, source);
+    for (auto why : {count_does_not_fit(scene_.grains.count, "grains.count"),
+                     drum_overfilled(scene_, scene_.grains.count, "grains.count")})
+      if (why) rd_.fail(rd_.get(grains, "count") ? Reader::line_of(*rd_.get(grains, "count")) : grains.line, *why);
     return scene_;
   }
 
@@ -138,7 +148,9 @@ class SceneParser {
     c.size = rd_.integer(*s, "size", [](std::int64_t v) { return v >= 1 && v <= 100000; },
                          "an integer number of grains per initial cluster, 1 to 100000")
                  .value_or(c.size);
-    c.block = rd_.number_or(*s, "block", c.block, positive, "a positive block size in mean grain diameters");
+    // A block narrower than a grain cuts nothing out (and its index overflows): meaningless, refused.
+    c.block = rd_.number_or(*s, "block", c.block, [](double v) { return v >= 1.0; },
+                            "a block size of at least 1 mean grain diameter");
     c.cycles = rd_.integer(*s, "cycles", [](std::int64_t v) { return v >= 0; }, "a number of cycles >= 0")
                    .value_or(c.cycles);
     if (auto file = rd_.string(*s, "file", "a CSV file name (relative to the scene file's folder)")) {
@@ -573,6 +585,63 @@ class SceneParser {
     if (c.kind == ContainerKind::Cylinder) return std::hypot(ax, ay) <= c.radius - r;
     auto [bx, by] = centre_band(r);
     return ax <= bx && (dim() == 2 || ay <= by);
+  }
+
+  // The neighbour grid covers the container's footprint, or on an open floor what the drops reach: a
+  // footprint too large for this machine's memory is refused before anything is allocated.
+  void check_grid_fits(const Section& container, const Section& source) {
+    const Container& c = scene_.container;
+    const SourceSpec& src = scene_.source;
+    const double cell = 2.0 * r_max_;
+    auto refuse_if_too_large = [&](double lx, double ly, const Section& s, const char* key, double value) {
+      if (auto why = grid_does_not_fit(dim(), lx, ly, cell, s.path + "." + key, value))
+        rd_.fail(rd_.get(s, key) ? Reader::line_of(*rd_.get(s, key)) : s.line, *why);
+    };
+    switch (c.kind) {
+      case ContainerKind::Box:
+      case ContainerKind::Periodic:
+        refuse_if_too_large(c.size_x, c.size_y, container, "size", std::max(c.size_x, c.size_y));
+        return;
+      case ContainerKind::HeleShaw:
+        if (c.gap > c.size_x) refuse_if_too_large(c.size_x, c.gap, container, "gap", c.gap);
+        else refuse_if_too_large(c.size_x, c.gap, container, "size", c.size_x);
+        return;
+      case ContainerKind::Cylinder:
+        refuse_if_too_large(2.0 * c.radius, 2.0 * c.radius, container, "radius", c.radius);
+        return;
+      case ContainerKind::Drum:
+        if (c.size_y > 2.0 * c.radius) refuse_if_too_large(2.0 * c.radius, c.size_y, container, "length", c.size_y);
+        else refuse_if_too_large(2.0 * c.radius, c.size_y, container, "radius", c.radius);
+        return;
+      case ContainerKind::Open:
+        break;
+    }
+    // Open floor: the grid grows from the origin to every drop position.
+    switch (src.kind) {
+      case SourceSpec::Kind::Point: {
+        const double lx = 2.0 * (std::abs(src.x) + src.scatter), ly = 2.0 * (std::abs(src.y) + src.scatter);
+        if (src.scatter >= std::max(std::abs(src.x), std::abs(src.y)))
+          refuse_if_too_large(lx, ly, source, "scatter", src.scatter);
+        else
+          refuse_if_too_large(lx, ly, source, "position", std::max(std::abs(src.x), std::abs(src.y)));
+        return;
+      }
+      case SourceSpec::Kind::Region: {
+        const double lx = 2.0 * std::max(std::abs(src.x_min), std::abs(src.x_max));
+        const double ly = 2.0 * std::max(std::abs(src.y_min), std::abs(src.y_max));
+        if (lx >= ly || dim() == 2) refuse_if_too_large(lx, ly, source, "x", 0.5 * lx);
+        else refuse_if_too_large(lx, ly, source, "y", 0.5 * ly);
+        return;
+      }
+      case SourceSpec::Kind::List: {
+        double lx = 0.0, ly = 0.0;
+        for (const ListedDrop& d : listed_) lx = std::max(lx, 2.0 * std::abs(d.x)), ly = std::max(ly, 2.0 * std::abs(d.y));
+        refuse_if_too_large(lx, ly, source, "file", std::max(lx, ly));
+        return;
+      }
+      case SourceSpec::Kind::Rain:
+        return;
+    }
   }
 
   void check_source_fits(const Section& s) {

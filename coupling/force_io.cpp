@@ -1,6 +1,7 @@
 #include "coupling/force_io.h"
 
-#include <unistd.h>
+#include "coupling/atomic_file.h"
+
 
 #include <cstdio>
 #include <filesystem>
@@ -96,24 +97,17 @@ void write_forces(const std::string& dir, const std::string& name, const Grains&
   if (ec) throw std::runtime_error(dir + ": cannot create the output folder: " + ec.message());
   const fs::path csv = fs::path(dir) / (name + ".forces.csv");
   const fs::path vtp = fs::path(dir) / (name + ".forces.vtp");
-  const std::string suffix = ".tmp." + std::to_string(::getpid());
-  const std::string csv_tmp = csv.string() + suffix, vtp_tmp = vtp.string() + suffix;
-  try {
-    write_vtp(vtp_tmp, grains, net);
-    {
-      std::FILE* f = std::fopen(csv_tmp.c_str(), "wb");
-      if (!f) throw std::runtime_error(csv.string() + ": cannot create " + csv_tmp);
-      const std::string text = csv_text(net);
-      const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
-      if (std::fclose(f) != 0 || !ok) throw std::runtime_error(csv.string() + ": write error");
-    }
-    fs::rename(csv_tmp, csv);
-    fs::rename(vtp_tmp, vtp);
-  } catch (...) {
-    fs::remove(csv_tmp, ec);
-    fs::remove(vtp_tmp, ec);
-    throw;
+  TempFile csv_file(csv), vtp_file(vtp);
+  write_vtp(vtp_file.temp().string(), grains, net);
+  {
+    std::FILE* f = std::fopen(csv_file.temp().c_str(), "wb");
+    if (!f) throw std::runtime_error(csv.string() + ": cannot create " + csv_file.temp().string());
+    const std::string text = csv_text(net);
+    const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+    if (std::fclose(f) != 0 || !ok) throw std::runtime_error(csv.string() + ": write error");
   }
+  csv_file.commit();
+  vtp_file.commit();
 }
 
 }  // namespace btr

@@ -18,7 +18,7 @@
 #include "coupling/number_text.h"
 #include "coupling/relax_plan.h"
 #include "coupling/relax_target.h"
-#include "coupling/text_file.h"
+#include "coupling/atomic_file.h"
 #include "coupling/timestep.h"
 
 namespace btr {

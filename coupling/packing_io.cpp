@@ -1,8 +1,9 @@
 // Packing files: NAME.csv (the interchange format), NAME.json (metadata), NAME.vtp (for ParaView).
 #include "coupling/packing_io.h"
 
+#include "coupling/atomic_file.h"
+
 #include <algorithm>
-#include <unistd.h>
 
 #include <cerrno>
 #include <cmath>
@@ -142,35 +143,6 @@ Grains read_csv(const std::string& path) {
   return grains;
 }
 
-// A file being written under a temporary name in its final folder; removed unless committed.
-class TempFile {
- public:
-  explicit TempFile(const fs::path& final_path)
-      : final_(final_path),
-        temp_(final_path.parent_path() /
-              (final_path.filename().string() + ".tmp." + std::to_string(::getpid()))) {}
-  ~TempFile() {
-    if (!committed_) {
-      std::error_code ec;
-      fs::remove(temp_, ec);
-    }
-  }
-  TempFile(const TempFile&) = delete;
-  TempFile& operator=(const TempFile&) = delete;
-  const fs::path& temp() const { return temp_; }
-  const fs::path& final_path() const { return final_; }
-  void commit() {
-    if (std::rename(temp_.c_str(), final_.c_str()) != 0)
-      throw std::runtime_error(final_.string() + ": cannot rename " + temp_.string() + " to it: " +
-                               std::strerror(errno));
-    committed_ = true;
-  }
-
- private:
-  fs::path final_, temp_;
-  bool committed_ = false;
-};
-
 struct FileCloser {
   void operator()(std::FILE* f) const { std::fclose(f); }
 };
@@ -273,6 +245,30 @@ void write_vtp(const TempFile& file, const Grains& grains, const std::vector<Poi
 
 }  // namespace
 
+namespace {
+
+// The record of the files written with a packing's JSON (key "files"): what a reader checks the CSV against.
+nlohmann::json file_record(const FileDigest& d) { return {{"bytes", d.bytes}, {"crc32", d.crc32}}; }
+
+// A CSV whose JSON records other bytes belongs to another write (or was cut short): refused.
+void check_against_record(const fs::path& csv, const fs::path& json_path, const nlohmann::json& meta) {
+  if (!meta.contains("files") || !meta["files"].is_object() || !meta["files"].contains("csv")) return;
+  const nlohmann::json& rec = meta["files"]["csv"];
+  if (!rec.is_object() || !rec.contains("bytes") || !rec.contains("crc32") || !rec["bytes"].is_number_unsigned() ||
+      !rec["crc32"].is_number_unsigned())
+    throw std::runtime_error(json_path.string() + ": files.csv: expected {\"bytes\": N, \"crc32\": N}");
+  const FileDigest d = digest_file(csv);
+  if (d.bytes != rec["bytes"].get<std::uint64_t>() || d.crc32 != rec["crc32"].get<std::uint32_t>())
+    throw std::runtime_error(csv.string() + ": does not match the record in " + json_path.string() + " (" +
+                             std::to_string(d.bytes) + " bytes, CRC-32 " + std::to_string(d.crc32) + "; recorded " +
+                             rec["bytes"].dump() + " bytes, CRC-32 " + rec["crc32"].dump() +
+                             "): the two were not written together (an interrupted write, or one file replaced); "
+                             "write the packing again, or remove the JSON's \"files\" entry if the CSV was edited "
+                             "on purpose");
+}
+
+}  // namespace
+
 Packing read_packing(const std::string& csv_path) {
   Packing packing;
   packing.grains = read_csv(csv_path);
@@ -288,6 +284,8 @@ Packing read_packing(const std::string& csv_path) {
     }
     if (!packing.meta.is_object())
       throw std::runtime_error(json_path.string() + ": expected a JSON object at the top level");
+    check_against_record(csv_path, json_path, packing.meta);
+    packing.meta.erase("files");  // it describes these files only; a packing written from this one gets its own
   }
   return packing;
 }
@@ -309,14 +307,20 @@ void write_packing(const std::string& dir, const std::string& name, const Packin
   if (ec) throw std::runtime_error(dir + ": cannot create the output folder: " + ec.message());
 
   const fs::path base = (dir.empty() ? fs::path(".") : fs::path(dir)) / name;
-  // All three are written under temporary names first and renamed only once all succeeded, so a
-  // failure leaves the previous packing of that name untouched.
+  // All three are written under temporary names first; a failure there leaves the previous packing of
+  // that name untouched. The JSON records the CSV's and VTP's sizes and CRC-32 and is renamed last, after
+  // the previous JSON was removed: a crash part-way leaves no JSON, or one that matches its CSV, never an
+  // old record beside new grains (readers check the record).
   TempFile csv(fs::path(base.string() + ".csv"));
   TempFile vtp(fs::path(base.string() + ".vtp"));
   TempFile json(fs::path(base.string() + ".json"));
   write_csv(csv, packing.grains);
   write_vtp(vtp, packing.grains, extra);
-  write_json(json, packing.meta);
+  nlohmann::json meta = packing.meta.is_object() ? packing.meta : nlohmann::json::object();
+  meta["files"] = {{"csv", file_record(digest_file(csv.temp()))}, {"vtp", file_record(digest_file(vtp.temp()))}};
+  write_json(json, meta);
+  fs::remove(json.final_path(), ec);
+  if (ec) throw std::runtime_error(json.final_path().string() + ": cannot replace it: " + ec.message());
   csv.commit();
   vtp.commit();
   json.commit();
@@ -325,7 +329,15 @@ void write_packing(const std::string& dir, const std::string& name, const Packin
 void write_packing_meta(const std::string& dir, const std::string& name, const nlohmann::json& meta) {
   const fs::path base = (dir.empty() ? fs::path(".") : fs::path(dir)) / name;
   TempFile json(fs::path(base.string() + ".json"));
-  write_json(json, meta);
+  nlohmann::json out = meta.is_object() ? meta : nlohmann::json::object();
+  // The files did not change: their record is the one of the JSON written with them, whatever meta says.
+  out.erase("files");
+  {
+    std::ifstream in(json.final_path(), std::ios::binary);
+    const nlohmann::json old = in ? nlohmann::json::parse(in, nullptr, false) : nlohmann::json();
+    if (old.is_object() && old.contains("files")) out["files"] = old["files"];
+  }
+  write_json(json, out);
   json.commit();
 }
 

@@ -1,12 +1,15 @@
 #include "coupling/process.h"
 
+#include <dirent.h>
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <deque>
 #include <fstream>
@@ -16,9 +19,86 @@
 extern char** environ;
 
 namespace btr {
+namespace {
+
+// The stop signal received while an engine runs (0: none). Only the handler writes it.
+volatile sig_atomic_t g_stop_signal = 0;
+
+void remember_stop_signal(int sig) { g_stop_signal = sig; }
+
+constexpr int kStopSignals[] = {SIGTERM, SIGINT, SIGHUP};
+
+// While it lives, SIGTERM, SIGINT and SIGHUP are noted instead of ending this process, so that the engine
+// can be stopped first; the previous handlers come back at the end.
+class StopSignalsNoted {
+ public:
+  StopSignalsNoted() {
+    g_stop_signal = 0;
+    struct sigaction sa {};
+    sa.sa_handler = remember_stop_signal;
+    sigemptyset(&sa.sa_mask);
+    for (std::size_t i = 0; i < std::size(kStopSignals); ++i) ::sigaction(kStopSignals[i], &sa, &previous_[i]);
+  }
+  ~StopSignalsNoted() {
+    for (std::size_t i = 0; i < std::size(kStopSignals); ++i) ::sigaction(kStopSignals[i], &previous_[i], nullptr);
+  }
+  StopSignalsNoted(const StopSignalsNoted&) = delete;
+  StopSignalsNoted& operator=(const StopSignalsNoted&) = delete;
+
+ private:
+  struct sigaction previous_[std::size(kStopSignals)] {};
+};
+
+// The processes whose parent is this one (read from /proc/PID/stat), except `except`.
+std::vector<pid_t> children_of_this_process(pid_t except) {
+  std::vector<pid_t> out;
+  const pid_t self = ::getpid();
+  DIR* proc = ::opendir("/proc");
+  if (!proc) return out;
+  while (const dirent* e = ::readdir(proc)) {
+    char* end = nullptr;
+    const long pid = std::strtol(e->d_name, &end, 10);
+    if (*end != '\0' || pid <= 0 || pid == except) continue;
+    std::ifstream stat("/proc/" + std::string(e->d_name) + "/stat");
+    std::string text;
+    if (!std::getline(stat, text)) continue;
+    const std::size_t close = text.rfind(')');  // the command name may hold spaces and parentheses
+    if (close == std::string::npos) continue;
+    char state = 0;
+    long ppid = 0;
+    if (std::sscanf(text.c_str() + close + 1, " %c %ld", &state, &ppid) == 2 && ppid == self)
+      out.push_back(static_cast<pid_t>(pid));
+  }
+  ::closedir(proc);
+  return out;
+}
+
+// Ends what the engine left behind. This process is a child subreaper, so the descendants whose parent
+// died (MPI ranks of a killed mpirun, say, which live in their own process groups) became its children.
+void end_orphaned_descendants(pid_t engine) {
+  for (int round = 0; round < 100; ++round) {
+    const std::vector<pid_t> left = children_of_this_process(engine);
+    if (left.empty()) return;
+    for (pid_t p : left) ::kill(p, SIGKILL);
+    for (pid_t p : left) ::waitpid(p, nullptr, 0);
+  }
+}
+
+}  // namespace
+
+std::string signal_name(int sig) {
+  switch (sig) {
+    case SIGTERM: return "SIGTERM";
+    case SIGINT: return "SIGINT";
+    case SIGHUP: return "SIGHUP";
+    case SIGKILL: return "SIGKILL";
+    default: return "signal " + std::to_string(sig);
+  }
+}
 
 std::string ProcessOutcome::describe() const {
   if (!started) return "could not start: " + start_error;
+  if (stopped_by != 0) return "stopped because btr received " + signal_name(stopped_by);
   if (timed_out) return "killed after the wall-time limit (" + std::to_string(wall_seconds) + " s)";
   if (signal != 0) return "killed by signal " + std::to_string(signal) + " (" + strsignal(signal) + ")";
   return "exit status " + std::to_string(exit_code);
@@ -60,6 +140,10 @@ ProcessOutcome run_process(const EngineCommand& command, const std::string& dir,
   for (std::string& e : env_strings) envp.push_back(e.data());
   envp.push_back(nullptr);
 
+  // Orphaned descendants of the engine become ours, so they can be found and ended (end_orphaned_descendants).
+  ::prctl(PR_SET_CHILD_SUBREAPER, 1);
+  const pid_t parent = ::getpid();
+  StopSignalsNoted noted;
   const auto t0 = std::chrono::steady_clock::now();
   const pid_t pid = ::fork();
   if (pid < 0) {
@@ -69,6 +153,10 @@ ProcessOutcome run_process(const EngineCommand& command, const std::string& dir,
   }
   if (pid == 0) {
     ::setpgid(0, 0);  // own process group: a timeout kills mpirun and every rank
+    // If btr dies (even by SIGKILL) the engine gets SIGTERM; mpirun passes it on to its ranks.
+    ::prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (::getppid() != parent) ::_exit(127);  // btr died before the line above
+    for (int sig : kStopSignals) ::signal(sig, SIG_DFL);
     int err = 0;
     if (::chdir(dir.c_str()) != 0) err = errno;
     if (!err && (::dup2(fd_in, 0) < 0 || ::dup2(fd_out, 1) < 0 || ::dup2(fd_out, 2) < 0)) err = errno;
@@ -104,7 +192,12 @@ ProcessOutcome run_process(const EngineCommand& command, const std::string& dir,
     if (r == pid) break;
     if (r < 0 && errno != EINTR) break;
     const auto now = clock::now();
-    if (!killed && now >= deadline) {
+    if (!killed && g_stop_signal != 0) {
+      ::kill(-pid, SIGTERM);
+      killed = true;
+      kill_time = now;
+      out.stopped_by = g_stop_signal;
+    } else if (!killed && now >= deadline) {
       ::kill(-pid, SIGTERM);
       killed = true;
       kill_time = now;
@@ -117,7 +210,9 @@ ProcessOutcome run_process(const EngineCommand& command, const std::string& dir,
   out.wall_seconds = std::chrono::duration<double>(clock::now() - t0).count();
   if (WIFEXITED(status)) out.exit_code = WEXITSTATUS(status);
   if (WIFSIGNALED(status)) out.signal = WTERMSIG(status);
-  if (out.timed_out) ::kill(-pid, SIGKILL);  // leftovers of the group, if any
+  if (!killed && g_stop_signal != 0) out.stopped_by = g_stop_signal;  // arrived as the engine ended
+  if (killed) ::kill(-pid, SIGKILL);  // leftovers of the group, if any
+  end_orphaned_descendants(pid);
   return out;
 }
 

@@ -20,7 +20,7 @@
 #include "coupling/process.h"
 #include "coupling/relax_plan.h"
 #include "coupling/relax_target.h"
-#include "coupling/text_file.h"
+#include "coupling/atomic_file.h"
 #include "coupling/timestep.h"
 
 namespace btr {
@@ -276,6 +276,9 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
 
   const EngineCommand cmd = adapter.command(dir, settings);
   const ProcessOutcome outcome = run_process(cmd, dir, settings.wall_time_limit, console);
+  if (outcome.stopped_by != 0)
+    throw Interrupted(outcome.stopped_by, "interrupted by " + signal_name(outcome.stopped_by) + ": the " + engine +
+                                              " run in " + dir + " and every process it started were stopped");
   if (!outcome.ok()) throw failure(outcome.describe());
 
   RelaxResult res;

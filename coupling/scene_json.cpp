@@ -1,6 +1,8 @@
 // Scene <-> JSON. Every field is written, so a later stage can rebuild the Scene from NAME.json alone.
 #include "coupling/scene_json.h"
 
+#include "btr/scene_limits.h"
+
 #include <initializer_list>
 #include <stdexcept>
 #include <string>
@@ -378,6 +380,7 @@ Scene scene_from_json(const json& j, const std::string& origin) {
     spec.snapshot_every = rd.integer(sh, "shaking", "snapshot_every");
     s.shaking = spec;
   }
+  if (auto p = scene_value_problem(s, FieldNames::Json)) rd.fail(p->field, p->message.substr(p->field.size() + 1));
   return s;
 }
 

@@ -11,7 +11,7 @@
 #include <stdexcept>
 
 #include "btr/cluster_unwrap.h"
-#include "coupling/text_file.h"
+#include "coupling/atomic_file.h"
 #include "coupling/yade_script.h"
 
 namespace btr {

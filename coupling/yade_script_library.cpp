@@ -10,6 +10,7 @@ const char* yade_script_library() {
 import math
 import os
 import sys
+import tempfile
 import time
 import traceback
 
@@ -44,10 +45,17 @@ def log(message):
 
 
 def write_atomically(name, text):
-    tmp = path(name + ".tmp")
-    with open(tmp, "w") as f:
-        f.write(text)
-    os.replace(tmp, path(name))
+    # A unique temporary name: two runs writing into one folder never share it.
+    fd, tmp = tempfile.mkstemp(prefix="." + name + ".", suffix=".tmp", dir=path("."))
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path(name))
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
 
 
 # Stale outputs of an earlier run must never be mistaken for this run's.

@@ -7,7 +7,7 @@ build=${BTR_BUILD_DIR:-$here/build}
 
 packages=(
   cmake g++ make pkg-config
-  libeigen3-dev libgtest-dev libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libvtk9-dev
+  libeigen3-dev libgtest-dev libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libvtk9-dev zlib1g-dev
   liggghts yade openmpi-bin
   python3-numpy python3-scipy python3-matplotlib python3-pytest
 )

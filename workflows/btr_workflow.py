@@ -23,7 +23,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from btrdem.io import InputError  # noqa: E402
-from btrdem.runner import REPO, StepFailed  # noqa: E402
+from btrdem.runner import REPO, Interrupted, StepFailed, stop_on_signals  # noqa: E402
 from btrdem.error_runtime import METHODS as METHODS_DEFAULT  # noqa: E402
 
 DEFAULT_SCENE = REPO / "inputs" / "bed3d.toml"
@@ -250,6 +250,10 @@ def main(argv=None) -> int:
             if args.cycles < 3:
                 raise InputError(f"--cycles: expected at least 3 cycles to fit, got {args.cycles}")
             run_nano_powder(args.out, args.cycles, args.tiny, progress)
+    except Interrupted as e:
+        print(f"btr_workflow.py {args.command}: {e}: the program it ran was stopped; run.json and the tables "
+              "record the interrupted case", file=sys.stderr)
+        return 128 + e.signum
     except InputError as e:
         print(f"btr_workflow.py {args.command}: {e}", file=sys.stderr)
         return 2
@@ -260,4 +264,5 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
+    stop_on_signals()  # a scheduler's SIGTERM stops the running program and records the case (not in tests' main())
     sys.exit(main())

@@ -10,4 +10,5 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import btr_workflow  # noqa: E402
 
 if __name__ == "__main__":
+    btr_workflow.stop_on_signals()
     sys.exit(btr_workflow.main(["pipeline", str(btr_workflow.DEFAULT_SCENE), "--engine", "liggghts"] + sys.argv[1:]))

@@ -18,6 +18,7 @@
 #include <vtkPolyData.h>
 #include <vtkXMLPolyDataReader.h>
 
+#include "coupling/atomic_file.h"
 #include "coupling/packing_io.h"
 
 namespace btr {
@@ -105,26 +106,20 @@ TEST(PackingIO, AFailedWriteKeepsThePreviousPackingAndLeavesNoTemporaryFile) {
   write_packing(dir.string(), "p", old);
   const std::string csv = slurp(dir / "p.csv"), json = slurp(dir / "p.json"), vtp = slurp(dir / "p.vtp");
 
-  // Block the VTP's temporary name with a folder: the CSV's temporary file is written first, then the
-  // VTP cannot be created.
-  const fs::path blocker = dir / ("p.vtp.tmp." + std::to_string(::getpid()));
-  fs::create_directory(blocker);
-  fs::create_directory(blocker / "x");
-  vtkObject::GlobalWarningDisplayOff();
-  EXPECT_THROW(write_packing(dir.string(), "p", awkward_packing(40)), std::runtime_error);
-  vtkObject::GlobalWarningDisplayOn();
+  // Metadata that cannot be written as JSON (a string that is not UTF-8): the CSV and VTP temporary files
+  // are written first, then the JSON fails, before anything is renamed.
+  Packing bad = awkward_packing(40);
+  bad.meta["note"] = std::string("\xff\xfe");
+  EXPECT_ANY_THROW(write_packing(dir.string(), "p", bad));
   EXPECT_EQ(slurp(dir / "p.csv"), csv);
   EXPECT_EQ(slurp(dir / "p.json"), json);
   EXPECT_EQ(slurp(dir / "p.vtp"), vtp);
   for (const auto& e : fs::directory_iterator(dir)) {
     const std::string name = e.path().filename().string();
-    if (e.path() != blocker) {
-      EXPECT_EQ(name.find(".tmp"), std::string::npos) << name;
-    }
+    EXPECT_EQ(name.find(".tmp"), std::string::npos) << name;
   }
 
   // Point data of the wrong length is refused before anything is written.
-  fs::remove_all(blocker);
   EXPECT_THROW(write_packing(dir.string(), "p", awkward_packing(40), {{"bad", std::vector<double>(39)}}),
                std::runtime_error);
   EXPECT_EQ(slurp(dir / "p.csv"), csv);
@@ -247,6 +242,66 @@ TEST(PackingIO, ClusterColumnRoundTripsAndIsOptional) {
   spit(dir / "bad.csv", "id,x,y,z,radius,species,cluster\n1,0,0,0.001,0.001,1,-2\n");
   const std::string msg = read_error(dir / "bad.csv");
   EXPECT_NE(msg.find("bad.csv:2: column 'cluster': expected an integer >= 0"), std::string::npos) << msg;
+  fs::remove_all(dir);
+}
+
+TEST(AtomicFile, TwoWritersOfOneFileGetTheirOwnTemporaryFiles) {
+  const fs::path dir = fresh_dir("temp");
+  fs::create_directories(dir);
+  {
+    TempFile a(dir / "x.csv"), b(dir / "x.csv");
+    EXPECT_NE(a.temp(), b.temp());
+    EXPECT_TRUE(fs::exists(a.temp()) && fs::exists(b.temp()));
+    EXPECT_EQ(a.temp().parent_path(), dir);
+    spit(a.temp(), "a\n");
+    a.commit();
+    EXPECT_EQ(slurp(dir / "x.csv"), "a\n");
+    // A committed file has the permissions a new file gets, not mkstemp's owner-only 0600.
+    EXPECT_NE(fs::status(dir / "x.csv").permissions() & fs::perms::others_read, fs::perms::none);
+  }
+  // b was never committed: its temporary file is gone, a's content stays.
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
+  EXPECT_EQ(names, std::vector<std::string>{"x.csv"});
+  fs::remove_all(dir);
+}
+
+TEST(PackingIO, TheJsonRecordsTheFilesAndARecordThatDoesNotMatchIsRefused) {
+  const fs::path dir = fresh_dir("record");
+  write_packing(dir.string(), "p", awkward_packing(30));
+  std::ifstream in(dir / "p.json");
+  const nlohmann::json meta = nlohmann::json::parse(in);
+  const FileDigest csv = digest_file(dir / "p.csv"), vtp = digest_file(dir / "p.vtp");
+  EXPECT_EQ(meta["files"]["csv"]["bytes"].get<std::uint64_t>(), fs::file_size(dir / "p.csv"));
+  EXPECT_EQ(meta["files"]["csv"]["crc32"].get<std::uint32_t>(), csv.crc32);
+  EXPECT_EQ(meta["files"]["vtp"]["crc32"].get<std::uint32_t>(), vtp.crc32);
+  // The record describes these files only: a packing read back does not carry it.
+  EXPECT_FALSE(read_packing((dir / "p.csv").string()).meta.contains("files"));
+
+  // Another packing's CSV beside this JSON (what a crash between two renames would leave): refused.
+  write_packing((dir / "other").string(), "p", awkward_packing(31));
+  fs::copy_file(dir / "other" / "p.csv", dir / "p.csv", fs::copy_options::overwrite_existing);
+  try {
+    read_packing((dir / "p.csv").string());
+    FAIL() << "a CSV that does not match its JSON's record was read";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("does not match the record"), std::string::npos) << e.what();
+  }
+  // Rewriting only the JSON keeps the record of the files on disk, whatever the new metadata says.
+  write_packing(dir.string(), "q", awkward_packing(12));
+  nlohmann::json stale = {{"files", {{"csv", {{"bytes", 1}, {"crc32", 2}}}}}, {"note", "rewritten"}};
+  write_packing_meta(dir.string(), "q", stale);
+  EXPECT_NO_THROW(read_packing((dir / "q.csv").string()));
+  fs::remove_all(dir);
+}
+
+TEST(AtomicFile, DigestIsZlibsCrc32OfTheBytes) {
+  const fs::path dir = fresh_dir("digest");
+  fs::create_directories(dir);
+  spit(dir / "t", "123456789");  // the CRC-32 check value of this string is 0xCBF43926
+  const FileDigest d = digest_file(dir / "t");
+  EXPECT_EQ(d.bytes, 9u);
+  EXPECT_EQ(d.crc32, 0xCBF43926u);
   fs::remove_all(dir);
 }
 

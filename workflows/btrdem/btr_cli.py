@@ -10,6 +10,9 @@ from .io import read_json, read_packing, write_json, write_scene_toml
 from .runner import StepFailed, run_command
 
 ENGINES = ("liggghts", "yade")
+# `btr relax` exit code: the run ended and wrote its packing, but a target it was given (--target-phi) was not
+# reached; relaxed.json's target_phi record says by how much.
+TARGET_NOT_REACHED = 6
 
 
 def deposit(btr: str, scene_path: str, outdir, name: str = "btr", seed: int | None = None, count: int | None = None,
@@ -52,11 +55,13 @@ def relax(btr: str, packing_csv: str, engine: str, outdir, np: int = 1, timestep
     log = _engine_log(outdir, engine)
     res = run_command(argv, outdir, label, progress=progress, watch=log, stdout_name=f"{label}.stdout")
     err = Path(res["stderr"]).read_text(errors="replace").strip()
-    out = {"returncode": res["returncode"], "wall_seconds": res["wall_seconds"], "cpu_seconds": res["cpu_seconds"],
+    target_missed = res["returncode"] == TARGET_NOT_REACHED
+    out = {"returncode": 0 if target_missed else res["returncode"], "target_reached": not target_missed,
+           "wall_seconds": res["wall_seconds"], "cpu_seconds": res["cpu_seconds"],
            "argv": [str(a) for a in argv],
-           "csv": str(outdir / "relaxed.csv"), "error": err if res["returncode"] != 0 else None,
+           "csv": str(outdir / "relaxed.csv"), "error": err if res["returncode"] not in (0, TARGET_NOT_REACHED) else None,
            "stdout": Path(res["stdout"]).read_text(errors="replace").strip()}
-    if res["returncode"] == 0 and not (outdir / "relaxed.csv").exists():
+    if out["returncode"] == 0 and not (outdir / "relaxed.csv").exists():
         out["returncode"] = -1
         out["error"] = f"btr relax succeeded but wrote no {outdir / 'relaxed.csv'}"
     if check and out["returncode"] != 0:

@@ -7,6 +7,7 @@ import math
 import os
 import tempfile
 import tomllib
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -67,6 +68,7 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
     try:
         with os.fdopen(fd, "w") as f:
             f.write(text)
+        os.chmod(tmp, 0o644)  # mkstemp's 0600 would be kept by the rename
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
@@ -153,6 +155,8 @@ def read_packing(csv_path: str | os.PathLike) -> Packing:
     jp = json_path_for(csv_path)
     if os.path.exists(jp):
         meta = read_json(jp)
+        _check_against_record(csv_path, jp, meta)
+        meta.pop("files", None)  # it describes these files only; a packing written from this one gets its own
     return Packing(ids=ids, pos=a[:, 1:4].copy(), radius=a[:, 4].copy(), species=a[:, 5].astype(int),
                    meta=meta, path=csv_path, cluster=a[:, 6].astype(int) if ncol == 7 else None)
 
@@ -166,17 +170,43 @@ def packing_csv_text(p: Packing) -> str:
     return "\n".join(lines) + "\n"
 
 
+def file_record(path: str | os.PathLike) -> dict:
+    """A file's size and CRC-32 (zlib's), as NAME.json's "files" records them (the same record as btr's)."""
+    data = Path(path).read_bytes()
+    return {"bytes": len(data), "crc32": zlib.crc32(data)}
+
+
+def _check_against_record(csv_path: str, json_path: str, meta: dict) -> None:
+    """A CSV whose JSON records other bytes belongs to another write (or was cut short): refused."""
+    rec = (meta.get("files") or {}).get("csv") if isinstance(meta.get("files"), dict) else None
+    if rec is None:
+        return
+    if not isinstance(rec, dict) or not isinstance(rec.get("bytes"), int) or not isinstance(rec.get("crc32"), int):
+        raise InputError(f'{json_path}: files.csv: expected {{"bytes": N, "crc32": N}}, got {rec!r}')
+    got = file_record(csv_path)
+    if got != {"bytes": rec["bytes"], "crc32": rec["crc32"]}:
+        raise InputError(f"{csv_path}: does not match the record in {json_path} ({got['bytes']} bytes, CRC-32 "
+                         f"{got['crc32']}; recorded {rec['bytes']} bytes, CRC-32 {rec['crc32']}): the two were not "
+                         "written together (an interrupted write, or one file replaced); write the packing again, "
+                         'or remove the JSON\'s "files" entry if the CSV was edited on purpose')
+
+
 def write_packing(directory: str | os.PathLike, name: str, p: Packing, point_data: dict | None = None,
                   vtp: bool = True) -> dict:
-    """Writes DIR/NAME.csv, DIR/NAME.json and (vtp=True) DIR/NAME.vtp; returns their paths."""
+    """Writes DIR/NAME.csv, DIR/NAME.json and (vtp=True) DIR/NAME.vtp; returns their paths.
+    As btr does: the JSON records the other files' sizes and CRC-32 and is written last, after the previous
+    JSON was removed, so a crash part-way leaves no JSON rather than an old one beside new grains."""
     d = Path(directory)
     d.mkdir(parents=True, exist_ok=True)
     out = {"csv": str(d / f"{name}.csv"), "json": str(d / f"{name}.json")}
+    Path(out["json"]).unlink(missing_ok=True)
     atomic_write_text(out["csv"], packing_csv_text(p))
-    write_json(out["json"], p.meta)
+    files = {"csv": file_record(out["csv"])}
     if vtp:
         out["vtp"] = str(d / f"{name}.vtp")
         write_vtp(out["vtp"], p, point_data or {})
+        files["vtp"] = file_record(out["vtp"])
+    write_json(out["json"], {**{k: v for k, v in p.meta.items() if k != "files"}, "files": files})
     return out
 
 
@@ -203,12 +233,18 @@ def write_vtp(path: str | os.PathLike, p: Packing, point_data: dict) -> None:
         if v.shape[0] != len(p):
             raise ValueError(f"point data '{k}': expected {len(p)} values, got {v.shape[0]}")
         arrays[k] = v
-    tmp = path.with_name("." + path.name + ".tmp.vtp")
-    if vtk_available():
-        _write_vtp_vtk(tmp, p.pos, arrays)
-    else:
-        _write_vtp_ascii(tmp, p.pos, arrays)
-    os.replace(tmp, path)
+    fd, tmp = tempfile.mkstemp(prefix="." + path.name + ".", suffix=".tmp.vtp", dir=path.parent)
+    os.close(fd)
+    try:
+        if vtk_available():
+            _write_vtp_vtk(tmp, p.pos, arrays)
+        else:
+            _write_vtp_ascii(tmp, p.pos, arrays)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
 
 
 def _write_vtp_vtk(path, pos, arrays):

@@ -7,11 +7,13 @@ what the earlier steps wrote."""
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import datetime
 import os
 import platform
 import resource
 import shutil
+import signal
 import subprocess
 import sys
 import time
@@ -24,6 +26,49 @@ REPO = Path(__file__).resolve().parents[2]
 
 class StepFailed(Exception):
     """A workflow step failed; the message says which and why."""
+
+
+class Interrupted(KeyboardInterrupt):
+    """A stop signal (SIGTERM, SIGINT, SIGHUP) reached the workflow. The command it was running has been
+    stopped; the case or step that ran records it, and the workflow ends with exit status 128 + signum."""
+
+    def __init__(self, signum: int):
+        self.signum = signum
+        super().__init__(f"interrupted by {signal.Signals(signum).name}")
+
+
+def _raise_interrupted(signum, _frame):
+    raise Interrupted(signum)
+
+
+def stop_on_signals() -> None:
+    """SIGTERM, SIGINT and SIGHUP raise Interrupted in the main thread, so a workflow stopped by a scheduler,
+    a timeout or Ctrl-C stops the program it runs (run_command) and records the interrupted case."""
+    for s in (signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
+        signal.signal(s, _raise_interrupted)
+
+
+_PR_SET_PDEATHSIG = 1
+
+
+def _die_with_parent() -> None:
+    """In the child, before exec: SIGTERM when this workflow dies, however it dies (even SIGKILL); `btr`
+    then stops its engine, mpirun its ranks."""
+    ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0)
+    if os.getppid() == 1:  # the workflow died before the line above
+        os._exit(127)
+
+
+def _stop(proc: subprocess.Popen, grace: float = 30.0) -> None:
+    """SIGTERM, then SIGKILL after `grace` seconds: btr needs a few to stop an engine and its MPI ranks."""
+    if proc.poll() is not None:
+        return
+    proc.send_signal(signal.SIGTERM)
+    try:
+        proc.wait(timeout=grace)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
 
 
 def find_btr() -> str:
@@ -82,27 +127,31 @@ def run_command(argv, cwd, label: str, progress=print, heartbeat: float = 15.0, 
     cpu0 = _children_cpu()
     with open(out_path, "w") as out, open(err_path, "w") as err:
         try:
-            proc = subprocess.Popen([str(a) for a in argv], cwd=cwd, stdout=out, stderr=err, env=full_env)
+            proc = subprocess.Popen([str(a) for a in argv], cwd=cwd, stdout=out, stderr=err, env=full_env,
+                                    preexec_fn=_die_with_parent)
         except OSError as e:
             raise StepFailed(f"{label}: cannot start {argv[0]}: {e}") from None
         next_beat = t0 + heartbeat
-        while True:
-            try:
-                rc = proc.wait(timeout=1.0)
-                break
-            except subprocess.TimeoutExpired:
-                now = time.monotonic()
-                if timeout is not None and now - t0 > timeout:
-                    proc.kill()
-                    proc.wait()
-                    raise StepFailed(f"{label}: killed after {timeout:.0f} s (time limit)")
-                if now >= next_beat:
-                    if status is not None:
-                        last = status()
-                    else:
-                        last = _last_line(watch) if watch else _last_line(out_path) or _last_line(err_path)
-                    progress(f"  [{label}] running {now - t0:.0f} s{': ' + last if last else ''}")
-                    next_beat = now + heartbeat
+        try:
+            while True:
+                try:
+                    rc = proc.wait(timeout=1.0)
+                    break
+                except subprocess.TimeoutExpired:
+                    now = time.monotonic()
+                    if timeout is not None and now - t0 > timeout:
+                        _stop(proc)
+                        raise StepFailed(f"{label}: killed after {timeout:.0f} s (time limit)")
+                    if now >= next_beat:
+                        if status is not None:
+                            last = status()
+                        else:
+                            last = _last_line(watch) if watch else _last_line(out_path) or _last_line(err_path)
+                        progress(f"  [{label}] running {now - t0:.0f} s{': ' + last if last else ''}")
+                        next_beat = now + heartbeat
+        except BaseException:  # Interrupted, KeyboardInterrupt: the program must not outlive the workflow
+            _stop(proc)
+            raise
     return {"returncode": rc, "wall_seconds": time.monotonic() - t0, "cpu_seconds": _children_cpu() - cpu0,
             "stdout": str(out_path), "stderr": str(err_path)}
 
@@ -194,8 +243,10 @@ class RunRecord:
         try:
             yield entry
         except BaseException as e:
-            entry.update(status="failed", wall_seconds=time.monotonic() - t0, error=str(e))
-            self.data["status"] = "failed"
+            interrupted = isinstance(e, Interrupted)
+            entry.update(status="interrupted" if interrupted else "failed", wall_seconds=time.monotonic() - t0,
+                         error=str(e))
+            self.data["status"] = "interrupted" if interrupted else "failed"
             self.data["failed_step"] = name
             self.save()
             if isinstance(e, (KeyboardInterrupt, InputError)):
@@ -213,6 +264,8 @@ class RunRecord:
         "running"; the body fills it in. If the body raises, the row gets status "fail" and the reason
         (the error's first line), run.json records the error, and the study goes on with the next case
         (only KeyboardInterrupt and bad input stop it). A row the body leaves "running" ends "ok".
+        A stop signal (Interrupted) ends the row "interrupted" with the signal as its reason, rewrites the
+        tables, and stops the study.
         on_row(rows), if given, rewrites the study's tables after every case, so they grow as it runs."""
         row.setdefault("status", "running")
         row.setdefault("reason", "")
@@ -220,6 +273,14 @@ class RunRecord:
         entry, t0 = self._start(name)
         try:
             yield row
+        except Interrupted as e:
+            row.update(status="interrupted", reason=str(e))
+            entry.update(status="interrupted", wall_seconds=time.monotonic() - t0, error=str(e))
+            self.data["status"] = "interrupted"
+            self.save()
+            if on_row is not None:
+                on_row(rows)
+            raise
         except (KeyboardInterrupt, InputError):
             entry.update(status="failed", wall_seconds=time.monotonic() - t0)
             self.save()
