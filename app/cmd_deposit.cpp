@@ -20,6 +20,7 @@
 #include "coupling/preload.h"
 #include "coupling/scene_json.h"
 #include "progress.h"
+#include "validators.h"
 
 namespace btr_app {
 namespace {
@@ -177,7 +178,7 @@ Runner add_deposit_command(CLI::App& app) {
   cmd->add_option("-o,--out", o->out, "output folder, created if missing")->required();
   cmd->add_option("--seed", o->seed, "random seed (default: the scene's [scene] seed)");
   cmd->add_option("--count", o->count, "number of grains to place (default: the scene's grains.count)")
-      ->check(CLI::PositiveNumber);
+      ->check(positive_integer());
   cmd->add_flag("--check", o->check,
                 "self-check the packing (overlaps, unsupported grains, grains outside the container); "
                 "the files are still written, and the exit code is 4 if anything is wrong");

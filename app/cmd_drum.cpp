@@ -21,6 +21,7 @@
 #include "coupling/atomic_file.h"
 #include "progress.h"
 #include "series_files.h"
+#include "validators.h"
 
 namespace btr_app {
 namespace {
@@ -124,7 +125,7 @@ Runner add_drum_command(CLI::App& app) {
   cmd->add_option("-o,--out", o->out, "output folder, created if missing")->required();
   cmd->add_option("--seed", o->seed, "random seed of the fill (default: the scene's)");
   cmd->add_option("--steps", o->steps, "number of steps (default: revolutions x steps_per_revolution)")
-      ->check(CLI::PositiveNumber);
+      ->check(positive_integer());
   cmd->add_flag("--check", o->check, "self-check every snapshot; exit code 4 if any fails (files are still written)");
   cmd->add_flag("-q,--quiet", o->quiet, "no progress bar and no summary; only errors");
   cmd->add_option("--name", o->name, "base name of the output files (default: the scene name)");

@@ -6,6 +6,7 @@
 #include "commands.h"
 #include "coupling/relax.h"
 #include "load_packing.h"
+#include "validators.h"
 
 namespace btr_app {
 
@@ -23,11 +24,11 @@ Runner add_export_command(CLI::App& app) {
   cmd->add_option("--to", o->engine, "liggghts | yade")->required()->check(CLI::IsMember({"liggghts", "yade"}));
   cmd->add_option("-o,--out", o->out, "output folder")->required();
   cmd->add_option("--timestep", o->timestep, "time step [s]; refused if above the stable one")
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number());
   cmd->add_option("--max-overlap", o->settings.max_overlap,
                   "refuse packings whose largest overlap / smaller radius exceeds this")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative_number());
 
   cmd->add_flag("--preload", o->settings.preload,
                 "write the pre-loaded packing (as btr relax --preload does)");

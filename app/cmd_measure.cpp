@@ -12,6 +12,7 @@
 #include "commands.h"
 #include "load_packing.h"
 #include "measures_json.h"
+#include "validators.h"
 
 namespace btr_app {
 namespace {
@@ -51,14 +52,14 @@ Runner add_measure_command(CLI::App& app) {
   cmd->add_option("--margin", o->metrics.margin_diameters,
                   "bulk window margin from floor, walls and free surface, in largest diameters")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative_number());
   cmd->add_option("--contact-tolerance", o->metrics.contact_tol,
                   "contact: gap < tolerance x smaller radius")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative_number());
   cmd->add_option("--rdf-max", o->metrics.rdf_max_d, "g(r) range in mean diameters")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number());
   cmd->add_option("--per-grain", o->per_grain,
                   "also write a CSV: id, coordination, in_window (0/1), surface_depth [m] below the free surface");
 

@@ -18,6 +18,7 @@
 #include "coupling/scene_json.h"
 #include "coupling/atomic_file.h"
 #include "series_files.h"
+#include "validators.h"
 
 namespace btr_app {
 namespace {
@@ -111,7 +112,7 @@ Runner add_redeposit_command(CLI::App& app) {
   cmd->add_option("-o,--out", o->out, "output folder, created if missing")->required();
   cmd->add_option("--seed", o->seed, "random seed (default: the scene's)");
   cmd->add_option("--cycles", o->cycles, "number of redeposition cycles (default: [clusters].cycles)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative_integer());
   cmd->add_flag("--check", o->check, "check every cycle's packing (overlaps, support of every cluster); exit 4 if any fails");
   cmd->add_flag("-q,--quiet", o->quiet, "no per-cycle lines; only errors");
   cmd->add_option("--name", o->name, "base name of the output files (default: the scene name)");

@@ -9,6 +9,7 @@
 #include "coupling/relax.h"
 #include "load_packing.h"
 #include "measures_json.h"
+#include "validators.h"
 
 namespace btr_app {
 
@@ -38,25 +39,25 @@ Runner add_relax_command(CLI::App& app) {
   cmd->add_option("--engine", o->engine, "liggghts | yade (default: the scene's relax.engine)")
       ->check(CLI::IsMember({"liggghts", "yade"}));
   cmd->add_option("--np", o->settings.np, "LIGGGHTS: MPI ranks (mpirun -np N); YADE: threads")
-      ->check(CLI::PositiveNumber);
+      ->check(positive_integer());
   cmd->add_option("-o,--out", o->out, "output folder (engine inputs, log, relaxed.csv/json/vtp, kinetic.csv, "
                                       "contacts.csv)")
       ->required();
   cmd->add_option("--timestep", o->timestep, "time step [s]; refused if above the stable one")
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number());
   // Stability studies only (workflows/btrdem/stability.py bisects the step with it): hidden from --help
   // (empty group), never used by default; relaxed.json and the console record that the step was forced.
   cmd->add_option("--force-timestep", o->forced_timestep,
                   "time step [s] used even above the stable one (stability study only)")
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->excludes("--timestep")
       ->group("");
   cmd->add_option("--max-time", o->max_time, "simulated time limit [s] (default: the scene's relax.max_time)")
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number());
   cmd->add_option("--damping", o->damping,
                   "quasi-static damping in [0, 1): YADE's NewtonIntegrator damping, LIGGGHTS' fix viscous of equal "
                   "dissipation per oscillation (default: the scene's relax.damping, 0 = off)")
-      ->check(CLI::Range(0.0, 0.999999));
+      ->check(number_in(0.0, 0.999999, "a damping in [0, 1)"));
   cmd->add_option("--stop-rule", o->stop_rule,
                   "kinetic-energy | unbalanced-force | displacement (default: the scene's relax.stop_rule)")
       ->check(CLI::IsMember({"kinetic-energy", "unbalanced-force", "displacement"}));
@@ -64,7 +65,7 @@ Runner add_relax_command(CLI::App& app) {
                   "land on this bulk packing fraction: in the same run, compact with the friction scaled down until "
                   "the bulk packing fraction reaches it, then restore the friction, stop every grain and settle "
                   "(default: the scene's relax.target_phi, unset = no compaction)")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(number_in(0.0, 1.0, "a packing fraction in [0, 1]"));
   cmd->add_option("--friction-scales", o->friction_scales,
                   "--target-phi: friction scales of the compaction, decreasing in [0, 1), the next tried when the "
                   "bed comes to rest below the target (default: the scene's relax.friction_scales, 0)")
@@ -72,27 +73,27 @@ Runner add_relax_command(CLI::App& app) {
   cmd->add_option("--compaction-damping", o->compaction_damping,
                   "--target-phi: damping during the compaction, as --damping; 0 lets the bed collapse freely (default: "
                   "the scene's relax.compaction_damping, 0.15)")
-      ->check(CLI::Range(0.0, 0.999999));
+      ->check(number_in(0.0, 0.999999, "a damping in [0, 1)"));
   cmd->add_option("--compaction-timestep-fraction", o->compaction_timestep_fraction,
                   "--target-phi: time step of the compaction as a fraction of the rule's Rayleigh / contact time "
                   "(the settle keeps relax.timestep_fraction's step; default: the scene's "
                   "relax.compaction_timestep_fraction, else the same step)")
-      ->check(CLI::Range(1e-9, 1.0));
+      ->check(number_in(1e-9, 1.0, "a fraction in (0, 1]"));
   cmd->add_option("--target-margin", o->settings.target_margin,
                   "bulk window of --target-phi: this many largest diameters from floor, walls and free surface "
                   "(btr measure --margin)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number());
   cmd->add_option("--max-overlap", o->settings.max_overlap,
                   "refuse packings whose largest overlap / smaller radius exceeds this")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative_number());
   cmd->add_flag("--preload", o->settings.preload,
                 "pre-loaded start: give each contact the overlap that carries its static force (also on when "
                 "the scene sets [relax] preload = true); writes OUTDIR/preloaded.* and preloaded.forces.*");
   cmd->add_option("--time-limit", o->settings.wall_time_limit, "wall-time limit of the engine run [s]")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number());
 
   return [o, cmd]() -> int {
     try {

@@ -20,6 +20,7 @@
 #include "coupling/atomic_file.h"
 #include "progress.h"
 #include "series_files.h"
+#include "validators.h"
 
 namespace btr_app {
 namespace {
@@ -143,7 +144,7 @@ Runner add_shake_command(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option("-o,--out", o->out, "output folder, created if missing")->required();
   cmd->add_option("--seed", o->seed, "random seed for the deposition and the noise (default: the scene's)");
-  cmd->add_option("--cycles", o->cycles, "number of cycles (default: [shaking].cycles)")->check(CLI::PositiveNumber);
+  cmd->add_option("--cycles", o->cycles, "number of cycles (default: [shaking].cycles)")->check(positive_integer());
   cmd->add_flag("--check", o->check, "self-check every snapshot; exit code 4 if any fails (files are still written)");
   cmd->add_flag("-q,--quiet", o->quiet, "no progress bar and no summary; only errors");
   cmd->add_option("--name", o->name, "base name of the output files (default: the scene name)");

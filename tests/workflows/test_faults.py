@@ -266,3 +266,19 @@ def test_a_target_phi_not_reached_exits_6_with_the_packing_written(btr_binary, s
     record = json.loads((out / "relaxed.json").read_text())["target_phi"]
     assert record["reached"] is False and record["target"] == 0.70
     assert len(read_packing(out / "relaxed.csv")) == 4000
+
+
+# ---- command-line values --------------------------------------------------------------------------
+
+@pytest.mark.parametrize("args,expect", [
+    (["relax", "{csv}", "-o", "{out}", "--np", "0"], "--np: expected a positive integer, got 0"),
+    (["relax", "{csv}", "-o", "{out}", "--damping", "2"], "--damping: expected a damping in [0, 1), got 2"),
+    (["deposit", "{scene}", "-o", "{out}", "--count", "-5"], "--count: expected a positive integer, got -5"),
+    (["measure", "{csv}", "--margin", "-1"], "--margin: expected a number >= 0, got -1"),
+])
+def test_command_line_refusals_say_what_was_expected(btr_binary, source_dir, tmp_path, args, expect):
+    csv = deposit(btr_binary, source_dir, tmp_path / "dep", count=30)
+    argv = [a.format(csv=csv, out=tmp_path / "out", scene=source_dir / "inputs" / "bed3d.toml") for a in args]
+    r = subprocess.run([btr_binary] + argv, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2, (r.returncode, r.stderr)
+    assert expect in r.stderr, r.stderr
