@@ -2,6 +2,7 @@
 // What the scene-driven subcommands (deposit, shake, drum) share: turning the libraries' exceptions
 // into the exit codes, checking the output name, and reporting the self-check the same way.
 #include <iostream>
+#include <new>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
@@ -29,6 +30,12 @@ int run_reporting_errors(const char* command, Body&& body) {
     return kBadInput;
   } catch (const btr::PlacementError& e) {
     std::cerr << "btr " << command << ": placement failed: " << e.what() << "\n";
+    return kInternalFailure;
+  } catch (const std::bad_alloc&) {
+    // The size checks (btr/size_budget.h) refuse what cannot fit before anything is allocated; this is a
+    // run that fit the estimate but not the memory free now (other jobs share the machine).
+    std::cerr << "btr " << command << ": out of memory: the run needed more than this machine had free; "
+              << "run it with fewer grains or when other jobs have ended\n";
     return kInternalFailure;
   } catch (const std::exception& e) {
     std::cerr << "btr " << command << ": " << e.what() << "\n";
