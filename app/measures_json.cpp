@@ -29,14 +29,15 @@ json stratification_json(const btr::Stratification& s) {
   json out = {{"valid", s.valid},
               {"note", s.note},
               {"angle_by_species", angles},
-              {"rule", "layers parallel to the fitted flank line(s), layer_d mean diameters thick, over the flank's "
+              {"rule", "layers parallel to the fitted flank line(s), layer_d mean diameters thick from skin_d largest diameters below it, over the flank's "
                        "fitted extent; small-species volume fraction per layer, least-squares line in depth removed; "
                        "null: the heap's (radius, species) pairs permuted among its grains; definitions: "
                        "docs/stratification/definitions.md"},
               {"layer_d", o.layer_d},
               {"permutations", o.permutations},
               {"quantile", o.quantile},
-              {"min_layer_volume", o.min_layer_volume}};
+              {"min_layer_volume", o.min_layer_volume},
+              {"skin_d", o.skin_d}};
   if (!s.valid) return out;
   out.update({{"small_species", s.small_species},
               {"large_species", s.large_species},

@@ -205,6 +205,7 @@ Stratification stratification_measures(const Grains& grains, int dimension, cons
     st.species_angles.push_back(angle);
   }
   // the heap's grains on the fitted sides; u is kept in units of the side's foot distance for top / toe
+  const double skin = options.skin_d * 2.0 * r_max;
   std::vector<Member> members;
   std::vector<double> radius;
   std::vector<char> small;
@@ -227,7 +228,7 @@ Stratification stratification_measures(const Grains& grains, int dimension, cons
     const Side& sd = sides[side];
     const double a = sd.line.intercept, z = g.x.z();
     const double s = u * sd.cos_t - (z - a) * sd.sin_t;
-    const double n = sd.cos_t * (a - u * sd.tan_t - z);
+    const double n = sd.cos_t * (a - u * sd.tan_t - z) - skin;  // depth below the skin
     const bool in_layers = s >= sd.s_lo && s <= sd.s_hi && n + g.r > 0.0;
     members.push_back({i, side, u / sd.foot_u, n, in_layers});
     radius.push_back(g.r);
@@ -272,7 +273,7 @@ Stratification stratification_measures(const Grains& grains, int dimension, cons
   double vs = 0.0, vt = 0.0;
   for (int j = 0; j < layers; ++j) vt += heap_sample.volume[j], vs += heap_sample.phi[j] * heap_sample.volume[j];
   st.small_fraction = vt > 0.0 ? vs / vt : 0.0;
-  for (int j = 0; j < layers; ++j) st.layer_depth_d.push_back((j + 0.5) * options.layer_d);
+  for (int j = 0; j < layers; ++j) st.layer_depth_d.push_back((skin + (j + 0.5) * h) / st.mean_diameter);
   st.layer_small_fraction = heap_sample.phi;
   st.layer_solid = heap_sample.volume;
   st.autocorrelation = heap_sample.autocorrelation;

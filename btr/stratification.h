@@ -5,7 +5,9 @@
 // - The flank: heap_measures()'s fitted line(s) (each fitted side of a 2D or Hele-Shaw heap, pooled; or
 //   the radial one), with coordinates u (distance from the source axis on that side), s along the line
 //   downhill and n the depth below it, normal to it.
-// - Layers: slabs k h <= n < (k + 1) h, h = layer_d mean diameters, over the grains whose centre's s lies
+// - Layers: slabs n0 + k h <= n < n0 + (k + 1) h, h = layer_d mean diameters, n0 = skin_d largest diameters
+//   (the rough surface, where the large grains stand out above the small, is left out), over the grains
+//   whose centre's s lies
 //   in the fitted extent of the flank; each grain's volume is cut exactly between the slabs. phi_k =
 //   small-species volume / solid volume of layer k. Layers are kept from the surface down to the last one
 //   holding at least min_layer_volume of the fullest layer's solid.
@@ -37,6 +39,7 @@ struct StratificationOptions {
   int permutations = 200;          // random mixtures of the null
   double quantile = 0.99;          // significance: above this quantile of the null
   double min_layer_volume = 0.3;   // deepest layer kept: solid >= this fraction of the fullest layer's
+  double skin_d = 1.0;             // layers start this many largest diameters below the flank line
   std::uint64_t seed = 24;         // the null's random order (fixed: same heap -> same numbers)
 };
 
