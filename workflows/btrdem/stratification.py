@@ -193,41 +193,58 @@ def _write_tables(out: Path, rows: list, settings: dict, command: str):
     atomic_write_text(out / "report.md", "\n".join(md) + "\n")
 
 
+def _draw_heap(ax, p, m: dict, window=None):
+    """Grains of packing p as disks to scale (3D: projected on x-z, the front plate's drawn last), small
+    species orange, large blue; the fitted flank line(s) dashed. x is measured from the source axis, in mm.
+    window: (x0, x1, z0, z1) in mm, or None for the whole heap."""
+    from matplotlib.collections import PatchCollection
+    from matplotlib.patches import Circle
+    x0 = float(m["heap"]["axis"][0])
+    st = m.get("stratification") or {}
+    sizes = np.unique(p.radius)
+    small = (p.species == st["small_species"]) if st.get("valid") else (p.radius <= sizes[0] * 1.05)
+    x, z = (p.pos[:, 0] - x0) * 1e3, p.pos[:, 2] * 1e3
+    keep = np.ones(len(p), bool)
+    if window is not None:
+        keep = (x > window[0] - 3) & (x < window[1] + 3) & (z > window[2] - 3) & (z < window[3] + 3)
+    idx = np.nonzero(keep)[0]
+    order = idx[np.argsort(-p.pos[idx, 1])] if p.dimension == 3 else idx
+    patches = [Circle((x[k], z[k]), p.radius[k] * 1e3) for k in order]
+    ax.add_collection(PatchCollection(patches, facecolors=np.where(small[order], "#e6550d", "#3182bd"),
+                                      edgecolors="none", linewidths=0))
+    for side, line in (m["heap"].get("flank_lines") or {}).items():
+        sign = -1.0 if side == "left" else 1.0
+        t = math.tan(math.radians(line["angle_deg"]))
+        u = np.array([0.0, line["intercept"] / t])
+        ax.plot(sign * u * 1e3, (line["intercept"] - u * t) * 1e3, "k--", lw=0.7)
+    ax.set_aspect("equal")
+    if window is None:
+        ax.set_xlim(np.min(x) - 2, np.max(x) + 2)
+        ax.set_ylim(0, np.max(z + p.radius * 1e3) + 2)
+    else:
+        ax.set_xlim(window[0], window[1])
+        ax.set_ylim(window[2], window[3])
+
+
 def _heaps_figure(out: Path, cases: dict, seeds: list):
-    """Every heap, rows = methods, columns = seeds; disks to scale (3D: projected on x-z)."""
+    """Every heap, rows = methods, columns = seeds."""
     if not cases:
         return
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.collections import PatchCollection
-    from matplotlib.patches import Circle
     methods = [m for m in METHODS if any(k[0] == m for k in cases)]
     fig, axes = plt.subplots(len(methods), len(seeds), figsize=(4.2 * len(seeds), 2.3 * len(methods)),
                              squeeze=False)
     for i, method in enumerate(methods):
         for j, seed in enumerate(seeds):
             ax = axes[i][j]
-            ax.set_aspect("equal")
-            ax.set_xticks([]), ax.set_yticks([])
+            ax.tick_params(labelsize=6)
             c = cases.get((method, seed))
             if c is None:
                 ax.set_title(f"{LABELS[method]}, seed {seed}: no heap", fontsize=7)
                 continue
-            p, m = c["packing"], c["measures"]
-            x0 = float(m["heap"]["axis"][0])
-            order = np.argsort(-p.pos[:, 1]) if p.dimension == 3 else np.arange(len(p))  # front plate last
-            small = p.radius <= np.median(np.unique(p.radius)) if len(np.unique(p.radius)) > 1 else np.ones(len(p), bool)
-            patches = [Circle(((p.pos[k, 0] - x0) * 1e3, p.pos[k, 2] * 1e3), p.radius[k] * 1e3) for k in order]
-            colours = np.where(small[order], "#e6550d", "#3182bd")
-            ax.add_collection(PatchCollection(patches, facecolors=colours, edgecolors="none", linewidths=0))
-            for side, line in (m["heap"].get("flank_lines") or {}).items():
-                sign = -1.0 if side == "left" else 1.0
-                u = np.array([0.0, line["intercept"] / math.tan(math.radians(line["angle_deg"]))])
-                ax.plot(sign * u * 1e3, (line["intercept"] - u * math.tan(math.radians(line["angle_deg"]))) * 1e3,
-                        "k--", lw=0.7)
-            ax.set_xlim((np.min(p.pos[:, 0]) - x0) * 1e3 - 2, (np.max(p.pos[:, 0]) - x0) * 1e3 + 2)
-            ax.set_ylim(0, np.max(p.pos[:, 2] + p.radius) * 1e3 + 2)
+            _draw_heap(ax, c["packing"], c["measures"])
             r = c["row"]
             wl = r.get("wavelength_d")
             ax.set_title(f"{LABELS[method]}, seed {seed}: theta {report.fmt(r.get('theta_deg'), 3)} deg, "
@@ -235,6 +252,35 @@ def _heaps_figure(out: Path, cases: dict, seeds: list):
                          f"{report.fmt(r.get('contrast'), 2)}", fontsize=6)
     fig.tight_layout()
     report.save_figure(fig, out / "heaps.png")
+
+
+def closeup(packing_csv, out_png, window_mm=None, title: str = ""):
+    """A figure of one heap coloured by species (as heaps.png draws it), whole or a window (x0, x1, z0, z1)
+    in mm from the source axis, with its stratification numbers from `btr measure` in the title. For heaps
+    measured by hand (docs/stratification/README.md), e.g.
+      cd workflows && /usr/bin/python3 -c "from btrdem.stratification import closeup;
+          closeup('../out/bh1e5/btr.csv', '../docs/stratification/btr2d_1e5_closeup.png', (60, 140, 100, 160))"
+    """
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    p = read_packing(packing_csv)
+    m = measures.measure(packing_csv)
+    st = m.get("stratification") or {}
+    fig, ax = plt.subplots(figsize=(7, 7 * ((window_mm[3] - window_mm[2]) / (window_mm[1] - window_mm[0]))
+                                    if window_mm else 4))
+    _draw_heap(ax, p, m, window_mm)
+    wl = st.get("wavelength_d")
+    ax.set_title((title + ": " if title else "") + f"N = {len(p)}, theta {report.fmt(m['heap'].get('angle_of_repose_deg'), 3)}"
+                 f" deg, wavelength {report.fmt(wl, 3) if wl is not None else '-'} d, contrast "
+                 f"{report.fmt(st.get('contrast'), 2)}, top-toe {report.fmt((st.get('top_toe') or {}).get('index'), 2)}",
+                 fontsize=7)
+    ax.set_xlabel("x - source x [mm]", fontsize=7)
+    ax.set_ylabel("z [mm]", fontsize=7)
+    ax.tick_params(labelsize=6)
+    fig.tight_layout()
+    report.save_figure(fig, out_png)
+    return m
 
 
 def _layers_figure(out: Path, cases: dict):
