@@ -89,6 +89,36 @@ TEST(Stratification, StripedHeapGivesItsPeriod) {
     }
 }
 
+// A conical heap on an open floor (3D, measured against the distance from the axis) striped in depth.
+TEST(Stratification, StripedConicalHeapGivesItsPeriod) {
+  const double apex = 0.02, t = std::tan(kTheta * kPi / 180.0), c = std::cos(kTheta * kPi / 180.0);
+  const double period = 2.5e-3, foot = apex / t;  // a cone keeps fewer layers: its deep layers lie nearer the axis
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> jitter(-0.1 * kSite, 0.1 * kSite);
+  Grains g;
+  for (double x = -foot; x < foot; x += kSite)
+    for (double y = -foot; y < foot; y += kSite)
+      for (double z = 0.5 * kSite; z < apex - std::hypot(x, y) * t - 0.5 * kSite; z += kSite) {
+        Grain q;
+        q.x = Vec3(x + jitter(rng), y + jitter(rng), z + jitter(rng));
+        const double depth = c * (apex - std::hypot(x, y) * t - z);
+        const bool small = static_cast<long>(std::floor(depth / (0.5 * period))) % 2 == 0;
+        q.r = small ? kSmall : kLarge;
+        q.species = small ? 1 : 2;
+        g.push_back(q);
+      }
+  const HeapMeasures h = heap_measures(g, 3, 0.0, 0.0, false);
+  ASSERT_TRUE(h.valid) << h.note;
+  ASSERT_TRUE(h.line_radial.valid);
+  const Stratification s = stratification_measures(g, 3, h, 0.0, 0.0);
+  ASSERT_TRUE(s.valid) << s.note;
+  ASSERT_EQ(s.flanks, std::vector<std::string>{"radial"});
+  ASSERT_TRUE(s.has_wavelength) << "peak " << s.peak_autocorrelation << " threshold " << s.peak_threshold
+                                << " layers " << s.layer_small_fraction.size();
+  EXPECT_NEAR(s.wavelength_d, period / mean_diameter(g), s.options.layer_d);
+  EXPECT_GT(s.contrast, 0.5);
+}
+
 TEST(Stratification, SmallGrainsAtTheTopGivePositiveTopToeIndex) {
   const Grains g = build_heap(2, 5, [](double, double, double, double u) { return u < 0.5; });
   const Stratification s = measure(g, 2);
