@@ -25,10 +25,10 @@ struct Side {
 
 // A grain of the heap as the measure sees it: the side it is on, and its coordinates there.
 struct Member {
-  std::size_t grain;
   int side;
-  double u, n;
-  bool in_layers;  // centre's s within the flank's extent
+  double u;        // distance from the axis over the side's foot distance L (top: < 1/3, toe: > 2/3)
+  double n;        // depth of the centre below the layers' top (the flank line less the skin)
+  bool in_layers;  // centre's s within the flank's fitted extent
 };
 
 // The quantities computed for the heap and for each random mixture.
@@ -230,7 +230,7 @@ Stratification stratification_measures(const Grains& grains, int dimension, cons
     const double s = u * sd.cos_t - (z - a) * sd.sin_t;
     const double n = sd.cos_t * (a - u * sd.tan_t - z) - skin;  // depth below the skin
     const bool in_layers = s >= sd.s_lo && s <= sd.s_hi && n + g.r > 0.0;
-    members.push_back({i, side, u / sd.foot_u, n, in_layers});
+    members.push_back({side, u / sd.foot_u, n, in_layers});
     radius.push_back(g.r);
     small.push_back(g.species == st.small_species);
     if (in_layers) deepest = std::max(deepest, n + g.r);
