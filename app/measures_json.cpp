@@ -163,6 +163,15 @@ std::string measures_summary(const btr::PackingMeasures& m) {
     else
       std::snprintf(buf, sizeof buf, "  heap: height %.4g m, no angle of repose (%s)\n", h.height, h.note.c_str());
     out += buf;
+    const btr::Stratification& st = m.stratification;
+    if (st.valid) {
+      char wave[40] = "none", top_toe[40] = "none";
+      if (st.has_wavelength) std::snprintf(wave, sizeof wave, "%.3g mean diameters", st.wavelength_d);
+      if (st.top_toe_valid) std::snprintf(top_toe, sizeof top_toe, "%.3f", st.top_toe_index);
+      std::snprintf(buf, sizeof buf, "  stratification: stripe wavelength %s, contrast %.3f, top-toe segregation %s\n",
+                    wave, st.contrast, top_toe);
+      out += buf;
+    }
   }
   return out;
 }
