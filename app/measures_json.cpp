@@ -20,6 +20,49 @@ json segregation_json(const btr::SegregationIndex& s) {
           {"basis", s.basis}};
 }
 
+json stratification_json(const btr::Stratification& s) {
+  json angles = json::array();
+  for (const btr::SpeciesAngle& a : s.species_angles)
+    angles.push_back({{"species", a.species}, {"mean_diameter", a.mean_diameter},
+                      {"angle_of_repose_deg", a.valid ? json(a.angle_deg) : json(nullptr)}});
+  const btr::StratificationOptions& o = s.options;
+  json out = {{"valid", s.valid},
+              {"note", s.note},
+              {"angle_by_species", angles},
+              {"rule", "layers parallel to the fitted flank line(s), layer_d mean diameters thick from skin_d largest diameters below it, over the flank's "
+                       "fitted extent; small-species volume fraction per layer, least-squares line in depth removed; "
+                       "null: the heap's (radius, species) pairs permuted among its grains; definitions: "
+                       "docs/stratification/definitions.md"},
+              {"layer_d", o.layer_d},
+              {"permutations", o.permutations},
+              {"quantile", o.quantile},
+              {"min_layer_volume", o.min_layer_volume},
+              {"skin_d", o.skin_d}};
+  if (!s.valid) return out;
+  out.update({{"small_species", s.small_species},
+              {"large_species", s.large_species},
+              {"mean_diameter", s.mean_diameter},
+              {"flanks", s.flanks},
+              {"layers", {{"depth_d", s.layer_depth_d}, {"small_fraction", s.layer_small_fraction}, {"solid", s.layer_solid}}},
+              {"small_fraction", s.small_fraction},
+              {"autocorrelation", s.autocorrelation},
+              {"sigma", s.sigma},
+              {"sigma_random", s.sigma_random},
+              {"sigma_threshold", s.sigma_threshold},
+              {"fluctuation_ratio", s.fluctuation_ratio},
+              {"contrast", s.contrast},
+              {"peak_lag_d", s.has_peak ? json(s.peak_lag_d) : json(nullptr)},
+              {"peak_autocorrelation", s.has_peak ? json(s.peak_autocorrelation) : json(nullptr)},
+              {"peak_threshold", s.peak_threshold},
+              {"wavelength_d", s.has_wavelength ? json(s.wavelength_d) : json(nullptr)}});
+  if (s.top_toe_valid)
+    out["top_toe"] = {{"small_fraction_top", s.small_fraction_top}, {"small_fraction_toe", s.small_fraction_toe},
+                      {"index", s.top_toe_index}, {"noise", s.top_toe_noise}};
+  else
+    out["top_toe"] = nullptr;
+  return out;
+}
+
 }  // namespace
 
 btr::PackingMeasures measure_in_scene(const btr::Grains& grains, const btr::Scene& scene,
@@ -67,6 +110,13 @@ json measures_to_json(const btr::PackingMeasures& m) {
             {"profile_points", h.profile_points},
             {"grains_beyond_flank", h.grains_beyond_flank},
             {"profile", profile_json(h.profile)}};
+    json lines = json::object();
+    for (const auto& [name, line] : {std::pair<const char*, const btr::FlankLine&>{"left", h.line_left},
+                                     {"right", h.line_right}, {"radial", h.line_radial}})
+      if (line.valid)
+        lines[name] = {{"angle_deg", line.angle_deg}, {"intercept", line.intercept}, {"start", line.start},
+                       {"end", line.end}};
+    heap["flank_lines"] = lines;
     if (h.valid) {
       heap["angle_of_repose_deg"] = h.angle_deg;
       if (h.by_sides) {
@@ -87,6 +137,7 @@ json measures_to_json(const btr::PackingMeasures& m) {
           {"heap", heap},
           {"surface_profile_x", profile_json(m.profile_x)},
           {"segregation", segregation_json(m.segregation)},
+          {"stratification", m.heap_source ? stratification_json(m.stratification) : json(nullptr)},
           {"height", {{"max_top", m.max_top}, {"mean_centre", m.mean_centre_height}}}};
 }
 
@@ -112,6 +163,15 @@ std::string measures_summary(const btr::PackingMeasures& m) {
     else
       std::snprintf(buf, sizeof buf, "  heap: height %.4g m, no angle of repose (%s)\n", h.height, h.note.c_str());
     out += buf;
+    const btr::Stratification& st = m.stratification;
+    if (st.valid) {
+      char wave[40] = "none", top_toe[40] = "none";
+      if (st.has_wavelength) std::snprintf(wave, sizeof wave, "%.3g mean diameters", st.wavelength_d);
+      if (st.top_toe_valid) std::snprintf(top_toe, sizeof top_toe, "%.3f", st.top_toe_index);
+      std::snprintf(buf, sizeof buf, "  stratification: stripe wavelength %s, contrast %.3f, top-toe segregation %s\n",
+                    wave, st.contrast, top_toe);
+      out += buf;
+    }
   }
   return out;
 }

@@ -571,6 +571,7 @@ struct Flank {
   double angle = 0.0;
   int points = 0;
   double foot = 0.0;  // distance of the last bin of the pile run that was looked at
+  FlankLine line;
 };
 
 // The flank of one side: walk from the apex bin outwards; fit from the first bin at or below hi to the
@@ -581,18 +582,22 @@ Flank fit_flank(const std::vector<ProfilePoint>& bins, double lo, double hi) {
   for (std::size_t b = 0; b < bins.size(); ++b)
     if (bins[b].top > bins[apex].top) apex = b;
   LineFit fit;
+  double first_fitted = 0.0, last_fitted = 0.0;
   f.foot = bins.empty() ? 0.0 : bins[apex].distance;
   for (std::size_t b = apex; b < bins.size(); ++b) {
     const ProfilePoint& p = bins[b];
     if (p.top < lo) break;  // the foot of the pile, or a gap (empty bins have top < 0)
     f.foot = p.distance;
     if (p.top > hi) continue;
+    if (fit.n == 0) first_fitted = p.distance;
+    last_fitted = p.distance;
     fit.add(p.distance, p.top);
   }
   f.points = static_cast<int>(fit.n);
   if (!fit.ok()) return f;
   f.angle = std::atan(-fit.slope()) * 180.0 / kPi;
   f.ok = true;
+  f.line = {true, f.angle, (fit.sy - fit.slope() * fit.sx) / fit.n, first_fitted, last_fitted};
   return f;
 }
 
@@ -640,6 +645,7 @@ HeapMeasures heap_measures(const Grains& grains, int dimension, double source_x,
     h.grains_beyond_flank = grains_beyond(samples, f.foot, width);
     h.valid = f.ok;
     h.angle_deg = f.angle;
+    h.line_radial = f.line;
     if (!h.valid) h.note = "fewer than 3 profile points on the flank between 20% and 80% of the height";
     return h;
   }
@@ -652,6 +658,7 @@ HeapMeasures heap_measures(const Grains& grains, int dimension, double source_x,
   h.grains_beyond_flank = grains_beyond(left, fl.foot, width) + grains_beyond(right, fr.foot, width);
   h.angle_left_deg = fl.angle, h.angle_right_deg = fr.angle;
   h.left_valid = fl.ok, h.right_valid = fr.ok;
+  h.line_left = fl.line, h.line_right = fr.line;
   // A heap built against an end wall (a Hele-Shaw cell fed at a corner) has one flank only: it is
   // measured on the side that has one.
   h.valid = fl.ok || fr.ok;
@@ -887,6 +894,7 @@ PackingMeasures measure_packing(const Grains& grains, int dimension, const Conta
   if (heap_source)
     m.heap = heap_measures(grains, dimension, source_x, source_y,
                            dimension == 2 || container.kind == ContainerKind::HeleShaw);
+  if (heap_source) m.stratification = stratification_measures(grains, dimension, m.heap, source_x, source_y);
   std::vector<double> x(grains.size());
   for (std::size_t i = 0; i < grains.size(); ++i) x[i] = grains[i].x.x();
   m.profile_x = surface_profile(grains, x);

@@ -10,6 +10,7 @@
 
 #include "btr/container.h"
 #include "btr/grain.h"
+#include "btr/stratification.h"
 
 namespace btr {
 
@@ -43,6 +44,13 @@ struct ProfilePoint {
   double distance = 0.0, top = 0.0;
 };
 
+// The least-squares line of one fitted flank: top = intercept - tan(angle) * distance, fitted over the
+// profile bins at distances [start, end] (the same fit that gives the angle).
+struct FlankLine {
+  bool valid = false;
+  double angle_deg = 0.0, intercept = 0.0, start = 0.0, end = 0.0;
+};
+
 struct HeapMeasures {
   static constexpr double kLowFraction = 0.2, kHighFraction = 0.8;  // the fitted flank, in heap heights
   bool valid = false;
@@ -56,6 +64,8 @@ struct HeapMeasures {
   int profile_points = 0;        // profile points in the fitted flanks
   std::int64_t grains_beyond_flank = 0;  // grains beyond the lower end of the fitted flank (foot, strays)
   std::vector<ProfilePoint> profile;    // against the distance from the axis, or x - source x (by_sides)
+  // The fitted lines against |x - source x| on each side (by_sides), or the distance from the axis (radial).
+  FlankLine line_left, line_right, line_radial;
 };
 
 struct RadialDistribution {
@@ -169,6 +179,7 @@ struct PackingMeasures {
   HeapMeasures heap;
   std::vector<ProfilePoint> profile_x;  // free surface against x (every packing)
   SegregationIndex segregation;         // vertical
+  Stratification stratification;        // heaps (heap_source) of two or more species (btr/stratification.h)
 };
 
 // heap_source: measure the heap about (source_x, source_y).

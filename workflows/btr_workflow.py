@@ -10,6 +10,7 @@
   drum [-o OUTDIR] [--revolutions N]      segregation and dynamic angle in a rotating drum (2D, 3D)
   hele-shaw [-o OUTDIR] [--reduced|--tiny] angle of repose in Hele-Shaw cells (seed 003): DEM, BTR, BTR + relax, BTR + ub-relax
   nano-powder [-o OUTDIR] [--cycles N]    rigid clusters redeposited: <h> = a - b exp(-n/tau) (2D, 3D)
+  stratification [-o OUTDIR] [--tiny]     two-species heap in a Hele-Shaw cell: stripes, top-toe segregation, BTR vs DEM
 
 The `btr` program is $BTR_BINARY, else build/app/btr. Exit status: 0 done, 2 bad input, 3 a step failed
 (its error is printed and recorded in OUTDIR/run.json; what earlier steps wrote is kept)."""
@@ -159,6 +160,14 @@ def main(argv=None) -> int:
     nano.add_argument("--cycles", type=int, default=12)
     nano.add_argument("--tiny", action="store_true", help="a few hundred grains, for tests")
 
+    st = sub.add_parser("stratification", help="two-species heap in a Hele-Shaw cell (seed 000 Figs. 7-8): stripe "
+                                               "wavelength and contrast, top-toe segregation, angle per species; "
+                                               "BTR 2D, BTR 3D cell, DEM pours with rolling friction off and on")
+    st.add_argument("-o", "--out", help="output folder (default out/stratification)")
+    st.add_argument("--tiny", action="store_true", help="450 grains (150 in 2D), one seed, a 60 mm cell (for tests)")
+    st.add_argument("--seeds", help="comma-separated seeds (default 1,2,3)")
+    st.add_argument("--n", type=int, help="grains of the 3D cases (default 3000; 2D: a third)")
+
     args = ap.parse_args(argv)
     if getattr(args, "out", None):
         # Every study runs btr and the engines inside its output folders: a relative -o must not nest.
@@ -250,6 +259,17 @@ def main(argv=None) -> int:
             if args.cycles < 3:
                 raise InputError(f"--cycles: expected at least 3 cycles to fit, got {args.cycles}")
             run_nano_powder(args.out, args.cycles, args.tiny, progress)
+        elif args.command == "stratification":
+            from btrdem.stratification import run_stratification
+            seeds = None
+            if args.seeds:
+                try:
+                    seeds = [int(x) for x in args.seeds.split(",")]
+                except ValueError:
+                    raise InputError(f"--seeds: expected comma-separated integers, got {args.seeds!r}") from None
+            if args.n is not None and args.n < 20:
+                raise InputError(f"--n: expected at least 20 grains, got {args.n}")
+            run_stratification(args.out, args.tiny, seeds, args.n, progress=progress)
     except Interrupted as e:
         print(f"btr_workflow.py {args.command}: {e}: the program it ran was stopped; run.json and the tables "
               "record the interrupted case", file=sys.stderr)
