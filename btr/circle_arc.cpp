@@ -51,4 +51,76 @@ int trig_roots(double a, double b, double c, double t_min, double t_max, double 
   return n;
 }
 
+TubeGap::TubeGap(const CircleArc& arc, const Vec3& point, int axis, double R) {
+  Vec3 w = arc.C - point, u = arc.u, v = arc.v;
+  w[axis] = u[axis] = v[axis] = 0.0;
+  const double rho2 = arc.rho * arc.rho, uu = u.squaredNorm(), vv = v.squaredNorm();
+  a0 = w.squaredNorm() - R * R + 0.5 * rho2 * (uu + vv);
+  a1 = 2.0 * arc.rho * w.dot(u);
+  b1 = 2.0 * arc.rho * w.dot(v);
+  a2 = 0.5 * rho2 * (uu - vv);
+  b2 = rho2 * u.dot(v);
+}
+
+double TubeGap::value(double t) const {
+  const double c = std::cos(t), s = std::sin(t);
+  return a0 + a1 * c + b1 * s + a2 * (c * c - s * s) + b2 * (2.0 * s * c);
+}
+
+double TubeGap::slope(double t) const {
+  const double c = std::cos(t), s = std::sin(t);
+  return -a1 * s + b1 * c - 2.0 * a2 * (2.0 * s * c) + 2.0 * b2 * (c * c - s * s);
+}
+
+double TubeGap::curvature(double t) const {
+  const double c = std::cos(t), s = std::sin(t);
+  return -a1 * c - b1 * s - 4.0 * a2 * (c * c - s * s) - 4.0 * b2 * (2.0 * s * c);
+}
+
+double TubeGap::max_bound() const { return a0 + std::hypot(a1, b1) + std::hypot(a2, b2); }
+
+double first_tube_exit(const CircleArc& arc, const Vec3& point, int axis, double R, double t_max) {
+  constexpr double kSkip = 1e-9, kApproach = 1e-9, kTol = 1e-13;
+  const TubeGap f(arc, point, axis, R);
+  // Round-off of f: its terms are squared lengths of the size of R^2 + |w|^2 + rho^2.
+  const double scale = R * R + std::abs(f.a0) + arc.rho * arc.rho;
+  if (f.max_bound() < -1e-14 * scale) return -1.0;  // the whole circle stays inside
+  const double second = std::hypot(f.a1, f.b1) + 4.0 * std::hypot(f.a2, f.b2);  // bounds |f''|
+  double a = 0.0, fa = f.value(0.0);
+  if (std::abs(fa) <= 1e-9 * R * R) {
+    const double out = f.slope(0.0), tangent = 2.0 * kApproach * arc.rho * R;
+    if (out > tangent || (out >= -tangent && f.curvature(0.0) > 0.0)) return 0.0;
+    a = std::min(kSkip, t_max);
+    fa = f.value(a);
+  } else if (fa > 0.0) {
+    return 0.0;  // starts outside (not reached by a path that was inside before)
+  }
+  // Leftmost-first branch and bound over [a, t_max]: intervals [lo, hi] with f(lo) <= level on a stack.
+  struct Span { double lo, hi, flo, fhi; };
+  Span stack[200];
+  int n = 0;
+  if (a >= t_max) return -1.0;
+  // Just past a skipped tangency f may still be a round-off above 0 while heading in: an exit is then
+  // where f rises above that level again.
+  const double level = std::max(0.0, fa);
+  stack[n++] = {a, t_max, fa, f.value(t_max)};
+  while (n > 0) {
+    Span s = stack[--n];
+    for (;;) {
+      if (s.fhi > level && s.hi - s.lo <= kTol) return s.lo;
+      const double h = 0.5 * (s.hi - s.lo), m = s.lo + h, fm = f.value(m);
+      if (fm > level) {  // an exit in [lo, m]: the first one is there
+        s = {s.lo, m, s.flo, fm};
+        continue;
+      }
+      if (s.fhi <= level && h <= kTol) break;  // grazes the surface from inside within round-off: no exit
+      if (fm + std::abs(f.slope(m)) * h + 0.5 * second * h * h <= level) break;  // inside throughout
+      if (n == 200) break;  // unreachable: the depth is at most log2(2 pi / kTol) < 50
+      stack[n++] = {m, s.hi, fm, s.fhi};
+      s = {s.lo, m, s.flo, fm};
+    }
+  }
+  return -1.0;
+}
+
 }  // namespace btr

@@ -30,4 +30,23 @@ double first_rising_root(double a, double b, double c, double t_min, double t_ma
 // All t in (t_min, t_max] with a cos t + b sin t = c, ascending; returns how many (0, 1 or 2).
 int trig_roots(double a, double b, double c, double t_min, double t_max, double out[2]);
 
+// The arc inside a tube: the surface at distance R from the line through `point` along coordinate axis
+// `axis` (2: the vertical cylinder; 1: the drum). The squared distance from the line is the
+// trigonometric polynomial of degree 2, f(t) + R^2, with
+//   f(t) = a0 + a1 cos t + b1 sin t + a2 cos 2t + b2 sin 2t.
+struct TubeGap {
+  double a0, a1, b1, a2, b2;
+  TubeGap(const CircleArc& arc, const Vec3& point, int axis, double R);
+  double value(double t) const;  // > 0: outside the tube
+  double slope(double t) const;
+  double curvature(double t) const;
+  double max_bound() const;  // an upper bound of f over all t
+};
+
+// Smallest t in [0, t_max] where the arc leaves the tube (f rises through 0), found by branch and bound
+// on f with a bound of |f''|, so a grazing exit is never stepped over; t is the last point inside, to
+// 1e-13. A start on the surface (|f(0)| <= 1e-9 R^2) is an exit at 0 if the arc heads out (slope, or
+// zero slope and curving out); otherwise that tangency is skipped as for grains. Negative: none.
+double first_tube_exit(const CircleArc& arc, const Vec3& point, int axis, double R, double t_max);
+
 }  // namespace btr

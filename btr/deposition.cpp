@@ -19,7 +19,6 @@
 namespace btr {
 namespace {
 
-constexpr int kMaxContacts = 8;
 // Arc parameter skipped after a tangency with a contact the grain is leaving (radians).
 constexpr double kSkipTangency = 1e-9;
 // A contact touched at the start of a path is met only if the path heads into it at least this
@@ -34,16 +33,24 @@ std::uint64_t mix(std::uint64_t z) {
   return z ^ (z >> 31);
 }
 
+// At most kMaxContacts (btr/descent.h); one more sets `overflow`, which the placement reports as an error.
 struct Contacts {
   Obstacle item[kMaxContacts];
   int n = 0;
+  bool overflow = false;
   bool has(std::int64_t key) const {
     for (int i = 0; i < n; ++i)
       if (item[i].key == key) return true;
     return false;
   }
   void add(const Obstacle& o) {
-    if (!has(o.key) && n < kMaxContacts) item[n++] = o;
+    if (has(o.key)) return;
+    if (n < kMaxContacts) item[n++] = o;
+    else overflow = true;
+  }
+  void add_all(const Contacts& other) {
+    for (int k = 0; k < other.n; ++k) add(other.item[k]);
+    overflow |= other.overflow;
   }
   void remove(int i) {
     for (int k = i; k + 1 < n; ++k) item[k] = item[k + 1];
@@ -60,6 +67,7 @@ struct Event {
     if (t_new < t - tol) {
       t = t_new;
       hits.n = 0;
+      hits.overflow = false;
       lift_off = -1;
     }
     if (t_new <= t + tol) hits.add(o);
@@ -85,7 +93,7 @@ struct Deposition::Impl {
   static Obstacle sphere(std::int32_t i, const Vec3& centre, double radius, int image, double r) {
     Obstacle o;
     o.kind = Obstacle::Kind::Sphere;
-    o.key = static_cast<std::int64_t>(i) * 81 + image;
+    o.key = sphere_key(i, image);
     o.c = centre;
     o.R = r + radius;
     return o;
@@ -102,7 +110,92 @@ struct Deposition::Impl {
   bool at_bottom(const Vec3& x, const Contacts& active) const;
   double free_start(double x, double y, double z, double r) const;
   Vec3 tie_break(const Vec3& x, const Contacts& active, std::uint64_t salt) const;
+  void check_periods(std::int64_t id) const;
+  void inside_footprint(double& px, double& py, double r) const;
+  void back_inside_walls(std::int64_t id, Vec3& x, double r) const;
+  static PlacementError too_many_contacts(std::int64_t id, const Vec3& x) {
+    std::ostringstream why;
+    why << "more than " << kMaxContacts << " simultaneous contacts at (" << x.x() << ", " << x.y() << ", " << x.z()
+        << "): the engine holds at most " << kMaxContacts;
+    return PlacementError(id, why.str());
+  }
 };
+
+// The neighbour grid tells periodic images apart up to NeighbourGrid::kMaxImageShift periods; a query
+// reaches at most ~16 r_max, so a period of r_max / 256 or more is safe.
+void Deposition::Impl::check_periods(std::int64_t id) const {
+  auto check = [&](double period, const char* axis) {
+    if (period * 256.0 >= r_max) return;
+    std::ostringstream why;
+    why << "the period " << period << " in " << axis << " is below r_max / 256 = " << r_max / 256.0
+        << ": periodic images that far apart cannot be told apart";
+    throw PlacementError(id, why.str());
+  };
+  if (wraps_x(container)) check(container.size_x, "x");
+  if (wraps_y(container, dimension)) check(container.size_y, "y");
+}
+
+// drop_misfit lets a drop reach 1e-12 r beyond a wall (round-off of the caller's arithmetic): such a
+// drop starts on the wall instead, so the grain cannot fall past it.
+void Deposition::Impl::inside_footprint(double& px, double& py, double r) const {
+  auto clamp_half = [&](double& v, double half) { v = std::clamp(v, -(half - r), half - r); };
+  switch (container.kind) {
+    case ContainerKind::Open:
+    case ContainerKind::Periodic:
+      break;
+    case ContainerKind::Box:
+      clamp_half(px, 0.5 * container.size_x);
+      if (dimension == 3) clamp_half(py, 0.5 * container.size_y);
+      break;
+    case ContainerKind::HeleShaw:
+      clamp_half(px, 0.5 * container.size_x);
+      clamp_half(py, 0.5 * container.gap);
+      break;
+    case ContainerKind::Cylinder: {
+      const double R = container.radius - r, h = std::hypot(px, py);
+      if (h > R) px *= R / h, py *= R / h;
+      break;
+    }
+    case ContainerKind::Drum:
+      clamp_half(px, container.radius);
+      if (dimension == 3 && !container.periodic_ends) clamp_half(py, 0.5 * container.size_y);
+      break;
+  }
+}
+
+// A grain rolling along a wall on grains that touch it creeps into it by round-off (~1e-10 r per
+// event, and the next grain rolling on it goes further): put it back on the wall, flat, cylinder or
+// drum. Farther than 1e-7 r beyond a wall it is no round-off: an error naming the grain.
+void Deposition::Impl::back_inside_walls(std::int64_t id, Vec3& x, double r) const {
+  const char* names[] = {"grain", "flat wall", "cylinder wall", "drum wall"};
+  for (const Obstacle& w : walls) {
+    const double g = w.gap(x);
+    if (!(g < 0.0)) continue;
+    if (g <= -1e-7 * r) {
+      std::ostringstream why;
+      why << "ends " << -g / r << " radii beyond the " << names[static_cast<int>(w.kind)] << " at (" << x.x() << ", "
+          << x.y() << ", " << x.z() << ")";
+      throw PlacementError(id, why.str());
+    }
+    switch (w.kind) {
+      case Obstacle::Kind::Plane: x -= g * w.c; break;
+      case Obstacle::Kind::Cylinder: {
+        // Onto the surface, then inwards by whole ulps until the gap is not negative.
+        const double s = w.R / std::hypot(x.x(), x.y());
+        x.x() *= s, x.y() *= s;
+        for (int k = 0; k < 4 && w.gap(x) < 0.0; ++k) x.x() *= 1.0 - 0x1p-52, x.y() *= 1.0 - 0x1p-52;
+        break;
+      }
+      case Obstacle::Kind::Drum: {
+        const double dz = x.z() - w.c.z(), s = w.R / std::sqrt(x.x() * x.x() + dz * dz);
+        x.x() *= s, x.z() = w.c.z() + dz * s;
+        for (int k = 0; k < 4 && w.gap(x) < 0.0; ++k) x.x() *= 1.0 - 0x1p-52, x.z() = w.c.z() + (x.z() - w.c.z()) * (1.0 - 0x1p-52);
+        break;
+      }
+      case Obstacle::Kind::Sphere: break;
+    }
+  }
+}
 
 // ---------------------------------------------------------------------------------------------
 // Fall: straight down to the highest contact below (DESIGN.md: z_j + sqrt((r + r_j)^2 - h^2)).
@@ -127,13 +220,13 @@ void Deposition::Impl::fall(Vec3& x, double r, Contacts& active, const std::vect
     // The drum's lower wall below x: z = z_axis - sqrt(R^2 - x^2).
     const Obstacle& w = walls.back();
     const double s = w.R * w.R - x.x() * x.x();
-    if (s > 0.0 && !active.has(w.key)) {
+    if (s >= 0.0 && !active.has(w.key)) {  // s = 0: a start on the drum's side, level with the axis
       const double z_hit = w.c.z() - std::sqrt(s);
       if (z_hit <= x.z() + tol) ev.offer(x.z() - z_hit, w, tol);
     }
   }
   x.z() -= ev.t;
-  for (int k = 0; k < ev.hits.n; ++k) active.add(ev.hits.item[k]);
+  active.add_all(ev.hits);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -167,25 +260,13 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
     double t = first_rising_root(-a, -b, g0, touching ? kSkipTangency : 0.0, ev.t + t_tol);
     if (t >= 0.0) ev.offer(t, o, t_tol);
   };
-  auto offer_cylinder = [&](const Obstacle& o) {
+  // The vertical cylinder and a drum (an arc out of the planes y = const): the squared distance from the
+  // axis is of degree 2 in cos t, sin t; its first rise through R^2 by branch and bound.
+  auto offer_tube = [&](const Obstacle& o, int axis) {
     if (active.has(o.key)) return;
-    // |P_h(t)| is not a trigonometric polynomial of degree one: sample, then bisect.
-    const int samples = 64;
-    double t0 = 0.0;
-    for (int k = 1; k <= samples; ++k) {
-      double t1 = ev.t * k / samples, g1 = o.gap(arc.at(t1));
-      if (g1 < 0.0) {
-        for (int it = 0; it < 100 && t1 - t0 > t_tol; ++it) {
-          double tm = 0.5 * (t0 + t1);
-          (o.gap(arc.at(tm)) < 0.0 ? t1 : t0) = tm;
-        }
-        ev.offer(t0, o, t_tol);
-        return;
-      }
-      t0 = t1;
-    }
+    const double t = first_tube_exit(arc, o.kind == Obstacle::Kind::Drum ? o.c : Vec3::Zero(), axis, o.R, ev.t + t_tol);
+    if (t >= 0.0) ev.offer(t, o, t_tol);
   };
-
   Vec3 lo, hi;
   arc.bounds(lo, hi);
   auto offer_drum = [&](const Obstacle& o) {
@@ -198,7 +279,7 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
     const double cz = arc.C.z() - o.c.z();
     if (std::sqrt(arc.C.x() * arc.C.x() + cz * cz) + arc.rho < o.R * (1.0 - 1e-9)) return;
     if (std::abs(arc.u.y()) > 1e-12 || std::abs(arc.v.y()) > 1e-12) {
-      offer_cylinder(o);  // squared distance from the axis is of degree 2 in cos t, sin t: sample
+      offer_tube(o, 1);
       return;
     }
     // An arc in a plane y = const: squared distance from the axis D(t) = K + a cos t + b sin t; the
@@ -216,7 +297,7 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
   // In a drum the floor only touches the drum's lowest line, where the drum wall is met first.
   const bool drum_container = container.kind == ContainerKind::Drum;
   for (const Obstacle& w : walls) {
-    if (w.kind == Obstacle::Kind::Cylinder) offer_cylinder(w);
+    if (w.kind == Obstacle::Kind::Cylinder) offer_tube(w, 2);
     else if (w.kind == Obstacle::Kind::Drum) offer_drum(w);
     else if (drum_container && w.is_floor()) continue;
     else offer_plane(w);
@@ -252,12 +333,7 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
         const double t = std::min(roots[m] + 1e-7, 0.5 * (roots[m] + arc.t_end));
         const Vec3 P = arc.at(t), T = arc.tangent(t);
         const Vec3 g_perp = z - z.dot(T) * T;
-        const Vec3 nk = active.item[k].normal(P), no = other.normal(P);
-        Eigen::Matrix2d A;
-        A << nk.dot(nk), nk.dot(no), no.dot(nk), no.dot(no);
-        Eigen::Vector2d rhs(nk.dot(g_perp), no.dot(g_perp));
-        const Eigen::Vector2d f = A.inverse() * rhs;
-        if (f(0) < 0.0 && roots[m] < ev.t - t_tol) {
+        if (unloads(g_perp, active.item[k].normal(P), other.normal(P)) && roots[m] < ev.t - t_tol) {
           ev.t = roots[m];
           ev.hits.n = 0;
           ev.lift_off = k;
@@ -269,7 +345,7 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
 
   x = arc.at(ev.t);
   if (ev.lift_off >= 0) active.remove(ev.lift_off);
-  for (int k = 0; k < ev.hits.n; ++k) active.add(ev.hits.item[k]);
+  active.add_all(ev.hits);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -311,11 +387,8 @@ bool Deposition::Impl::roll_along_cylinder(Vec3& x, double r, Contacts& active, 
     const Vec3 T = Vec3(sign * dPh.x(), sign * dPh.y(), sign * dz).normalized();
     const Vec3 g_perp = z - z.dot(T) * T;
     const Vec3 np = p.normal(P), nc = cyl.normal(P);
-    Eigen::Matrix2d A;
-    A << np.dot(np), np.dot(nc), nc.dot(np), nc.dot(nc);
-    const Eigen::Vector2d f2 = A.inverse() * Eigen::Vector2d(np.dot(g_perp), nc.dot(g_perp));
-    if (f2(0) < 0.0) return 2;
-    if (f2(1) < 0.0) return 3;
+    if (unloads(g_perp, np, nc)) return 2;
+    if (unloads(g_perp, nc, np)) return 3;
     return 0;
   };
   const double step = sign * 0.05 * r / Rc;
@@ -383,7 +456,10 @@ double Deposition::Impl::free_start(double x, double y, double z, double r) cons
 // up to the wall, the start moves inwards in steps of one radius to the first column with room.
 void Deposition::Impl::drum_start(Vec3& x, double z, double r) const {
   const double Rc = container.radius - r, za = container.radius;
-  const double x0 = x.x(), inward = x0 > 0.0 ? -1.0 : 1.0;
+  // At |x| = Rc the wall is vertical and level with the axis: gravity is tangent to it and the grain
+  // would alternate between meeting it and leaving it. A start there is moved 1e-12 Rc inwards.
+  const double edge = Rc * (1.0 - 1e-12);
+  const double x0 = std::clamp(x.x(), -edge, edge), inward = x0 > 0.0 ? -1.0 : 1.0;
   for (int k = 0; k * r <= std::abs(x0) + r; ++k) {
     const double xk = k * r >= std::abs(x0) ? 0.0 : x0 + inward * k * r;
     const double half_chord = std::sqrt(std::max(0.0, Rc * Rc - xk * xk));
@@ -463,11 +539,8 @@ bool Deposition::Impl::roll_along_drum(Vec3& x, double r, Contacts& active, int 
     const Vec3 T = Vec3(sign * dx, sign * dy, sign * dz).normalized();
     const Vec3 g_perp = z - z.dot(T) * T;
     const Vec3 np = p.normal(P), nc = drum.normal(P);
-    Eigen::Matrix2d A;
-    A << np.dot(np), np.dot(nc), nc.dot(np), nc.dot(nc);
-    const Eigen::Vector2d f2 = A.inverse() * Eigen::Vector2d(np.dot(g_perp), nc.dot(g_perp));
-    if (f2(0) < 0.0) return 2;
-    if (f2(1) < 0.0) return 3;
+    if (unloads(g_perp, np, nc)) return 2;
+    if (unloads(g_perp, nc, np)) return 3;
     return 0;
   };
   const double step = sign * 0.05 * r / Rc;
@@ -561,11 +634,18 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
     why << "radius " << r << " is not in (0, r_max = " << r_max << "]";
     throw PlacementError(id, why.str());
   }
+  if (!std::isfinite(drop.x) || (dimension == 3 && !std::isfinite(drop.y)) || std::isinf(drop.z)) {
+    std::ostringstream why;
+    why << "dropped at a non-finite position (" << drop.x << ", " << drop.y << ", " << drop.z << ")";
+    throw PlacementError(id, why.str());
+  }
+  check_periods(id);
   double px = drop.x, py = dimension == 3 ? drop.y : 0.0;
   if (wraps_x(container)) px -= container.size_x * std::floor(px / container.size_x + 0.5);
   if (wraps_y(container, dimension)) py -= container.size_y * std::floor(py / container.size_y + 0.5);
   const std::string misfit = drop_misfit(container, dimension, px, py, r);
   if (!misfit.empty()) throw PlacementError(id, "dropped outside the container: " + misfit);
+  inside_footprint(px, py, r);
 
   container_walls(container, dimension, r, walls);
   Vec3 x(px, py, 0.0);
@@ -578,6 +658,7 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
   int drum_stalls = 0;
   Vec3 blocked_tie = Vec3::Zero();  // the last tie-break roll that could not move the grain
   for (int event = 0; event < max_events && !stable; ++event) {
+    if (active.overflow) throw too_many_contacts(id, x);
     bool tied = false;
     const Vec3 before_event = x;
     Vec3 normals[kMaxContacts];
@@ -726,17 +807,17 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
     if (active.n) why << ")";
     throw PlacementError(id, why.str());
   }
-  // A grain rolling along a wall on grains that touch it creeps into it by round-off (~1e-10 r per
-  // event, and the next grain rolling on it goes further): put it back on the wall.
-  for (const Obstacle& w : walls) {
-    if (w.kind != Obstacle::Kind::Plane) continue;
-    const double g = w.gap(x);
-    if (g < 0.0 && g > -1e-7 * r) x -= g * w.c;
-  }
+  if (active.overflow) throw too_many_contacts(id, x);
+  back_inside_walls(id, x, r);
   if (wraps_x(container)) x.x() -= container.size_x * std::floor(x.x() / container.size_x + 0.5);
   if (wraps_y(container, dimension)) x.y() -= container.size_y * std::floor(x.y() / container.size_y + 0.5);
+  if (!x.allFinite()) throw PlacementError(id, "the placement ended at a non-finite position");
+  try {
+    grid.insert(static_cast<std::int32_t>(grains.size()), x, r);
+  } catch (const std::exception& e) {  // an escaped grain, or an open floor's grid out of budget
+    throw PlacementError(id, e.what());
+  }
   grains.push_back(Grain{x, r, drop.species});
-  grid.insert(static_cast<std::int32_t>(grains.size() - 1), x, r);
   top = std::max(top, x.z() + r);
   return grains.back();
 }

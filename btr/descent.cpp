@@ -1,6 +1,7 @@
 #include "btr/descent.h"
 
 #include <Eigen/Dense>
+#include <stdexcept>
 
 namespace btr {
 namespace {
@@ -56,18 +57,22 @@ bool try_subset(const Vec3* n, std::size_t count, unsigned mask, Descent& out) {
 }  // namespace
 
 Descent descend(const Vec3* normals, std::size_t count) {
-  // Subsets in order of size, then of index: the first feasible one is the answer, which makes
-  // degenerate cases (several subsets giving the same direction) deterministic.
-  const unsigned full = 1u << count;
-  for (unsigned size = 0; size <= 3; ++size) {
-    for (unsigned mask = 0; mask < full; ++mask) {
-      unsigned bits = 0;
-      for (unsigned m = mask; m; m &= m - 1) ++bits;
-      if (bits != size) continue;
-      Descent out;
-      if (try_subset(normals, count, mask, out)) return out;
-    }
-  }
+  if (count > static_cast<std::size_t>(kMaxContacts)) throw std::length_error("descend: more than kMaxContacts contacts");
+  // Subsets in order of size, then of index (as bit masks: the largest index first, then the next), so
+  // the first feasible one is the answer and degenerate cases (several subsets giving the same
+  // direction) are deterministic.
+  const int n = static_cast<int>(count);
+  Descent out;
+  if (try_subset(normals, count, 0u, out)) return out;
+  for (int a = 0; a < n; ++a)
+    if (try_subset(normals, count, 1u << a, out)) return out;
+  for (int b = 1; b < n; ++b)
+    for (int a = 0; a < b; ++a)
+      if (try_subset(normals, count, (1u << a) | (1u << b), out)) return out;
+  for (int c = 2; c < n; ++c)
+    for (int b = 1; b < c; ++b)
+      for (int a = 0; a < b; ++a)
+        if (try_subset(normals, count, (1u << a) | (1u << b) | (1u << c), out)) return out;
   // Only reachable through round-off with more than three nearly dependent contacts: carried.
   return Descent{};
 }

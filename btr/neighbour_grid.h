@@ -16,12 +16,25 @@ class NeighbourGrid {
  public:
   NeighbourGrid(int dimension, const Container& container, double r_max);
 
+  // Throws std::out_of_range for a non-finite centre or one outside a bounded container's grid (an
+  // escaped grain; a centre on the grid's edge up to round-off is kept in the edge column), and
+  // std::length_error when an open floor's grid would grow beyond its column budget.
   void insert(std::int32_t index, const Vec3& x, double r);
+
+  // Image shifts up to this many periods are told apart by image codes.
+  static constexpr long kMaxImageShift = 16384;
+  static int image_code(long kx, long ky) {
+    return static_cast<int>(((kx + kMaxImageShift) << 15) | (ky + kMaxImageShift));
+  }
+  // Columns held (an open floor grows them as the heap spreads).
+  std::size_t column_count() const { return columns_.size(); }
 
   double cell() const { return h_; }
 
   // f(index, centre, radius, image) for every grain in the cells meeting [lo, hi]; the centre is
-  // that of the periodic image found, and image a small code telling images of one grain apart.
+  // that of the periodic image found, and image a code telling images of one grain apart: distinct
+  // for every image shift (kx, ky) with |kx|, |ky| < kMaxImageShift (image_code; queries wider than
+  // that are refused with std::length_error).
   template <class F>
   void visit_box(const Vec3& lo, const Vec3& hi, F&& f) const;
 
@@ -41,6 +54,7 @@ class NeighbourGrid {
   template <class F>
   void visit_cell_range(Range rx, Range ry, long iz_lo, long iz_hi, F&& f) const;
 
+  std::size_t count_ = 0;  // grains inserted
   int dimension_;
   bool wrap_x_, wrap_y_;  // periodic axes (wraps_x, wraps_y of the container)
   bool grows_;       // open floor: the footprint is unknown in advance
@@ -101,7 +115,7 @@ void NeighbourGrid::visit_cell_range(Range rx, Range ry, long iz_lo, long iz_hi,
       if (begin == end) continue;
       __builtin_prefetch(begin);
       __builtin_prefetch(reinterpret_cast<const char*>(begin) + 64);
-      runs[n++] = Run{begin, end, kx * period_x_, ky * period_y_, static_cast<int>((kx + 4) * 9 + (ky + 4))};
+      runs[n++] = Run{begin, end, kx * period_x_, ky * period_y_, image_code(kx, ky)};
       if (n == kBatch) flush();
     }
   }
