@@ -5,46 +5,59 @@
 namespace btr {
 
 void CircleArc::bounds(Vec3& lo, Vec3& hi) const {
-  Vec3 p0 = at(0.0), p1 = at(t_end);
+  // The ends, then the extremes of each component k, C_k -+ rho |(u_k, v_k)| where (cos t, sin t) is
+  // -+(u_k, v_k) / |(u_k, v_k)|, when that point lies inside the arc (0, t_end): no inverse trigonometry.
+  const double ce = std::cos(t_end), se = std::sin(t_end);
+  const Vec3 p0 = C + rho * u, p1 = C + rho * (ce * u + se * v);
   lo = p0.cwiseMin(p1);
   hi = p0.cwiseMax(p1);
+  // Is the direction (c, s) at an angle in (0, t_end) (t_end in [0, 2 pi])?
+  auto inside = [&](double c, double s) {
+    const double after_end = c * se - s * ce;  // > 0: (c, s) is before the end direction (within pi of it)
+    if (t_end <= M_PI) return s > 0.0 && after_end > 0.0;
+    return s > 0.0 || after_end > 0.0;
+  };
   for (int k = 0; k < 3; ++k) {
-    // Extremes of component k at t* = atan2(v_k, u_k) and t* + pi.
-    double ts = std::atan2(v[k], u[k]);
-    for (double t : {ts, ts + M_PI, ts - M_PI, ts + kTwoPi}) {
-      if (t > 0.0 && t < t_end) {
-        double x = C[k] + rho * (std::cos(t) * u[k] + std::sin(t) * v[k]);
-        lo[k] = std::min(lo[k], x);
-        hi[k] = std::max(hi[k], x);
-      }
-    }
+    const double m = std::sqrt(u[k] * u[k] + v[k] * v[k]);
+    if (m <= 0.0) continue;
+    const double c = u[k] / m, s = v[k] / m;
+    if (inside(c, s)) hi[k] = std::max(hi[k], C[k] + rho * m);
+    if (inside(-c, -s)) lo[k] = std::min(lo[k], C[k] - rho * m);
   }
 }
 
-double first_rising_root(double a, double b, double c, double t_min, double t_max) {
-  // a cos t + b sin t = A cos(t - phi), rising where sin(t - phi) < 0.
-  const double A = std::hypot(a, b);
-  if (A <= 0.0 || std::abs(c) > A) return -1.0;
-  const double phi = std::atan2(b, a);
-  const double delta = std::acos(std::clamp(c / A, -1.0, 1.0));
-  // Rising root: t - phi = -delta (mod 2 pi).
-  double t = phi - delta;
-  t = std::fmod(t, kTwoPi);
+// Roots of a cos t + b sin t = c without the amplitude's angle: with A^2 = a^2 + b^2 and q = sqrt(A^2 - c^2),
+// the rising root (t = phi - delta, phi = atan2(b, a), delta = acos(c / A)) has cos t = (a c + b q) / A^2 and
+// sin t = (b c - a q) / A^2, the falling one (t = phi + delta) cos t = (a c - b q) / A^2, sin t = (b c + a q) / A^2:
+// one atan2 each, and A^2 cancels in it.
+namespace {
+
+double wrap_after(double t, double t_min) {
   if (t < 0.0) t += kTwoPi;
   while (t <= t_min) t += kTwoPi;
+  return t;
+}
+
+}  // namespace
+
+double first_rising_root(double a, double b, double c, double t_min, double t_max, double screen) {
+  const double A2 = a * a + b * b;
+  if (A2 <= 0.0 || c * c > A2) return -1.0;
+  const double q = std::sqrt(A2 - c * c);
+  const double y = b * c - a * q, x = a * c + b * q;
+  // Beyond t_max whatever t_min is (a root wrapped past t_min lies beyond 2 pi).
+  if (screen < 5.0 && pseudo_angle(x, y) > screen) return -1.0;
+  const double t = wrap_after(std::atan2(y, x), t_min);
   return t <= t_max ? t : -1.0;
 }
 
 int trig_roots(double a, double b, double c, double t_min, double t_max, double out[2]) {
-  const double A = std::hypot(a, b);
-  if (A <= 0.0 || std::abs(c) > A) return 0;
-  const double phi = std::atan2(b, a);
-  const double delta = std::acos(std::clamp(c / A, -1.0, 1.0));
+  const double A2 = a * a + b * b;
+  if (A2 <= 0.0 || c * c > A2) return 0;
+  const double q = std::sqrt(A2 - c * c);
   int n = 0;
-  for (double t : {phi - delta, phi + delta}) {
-    t = std::fmod(t, kTwoPi);
-    if (t < 0.0) t += kTwoPi;
-    while (t <= t_min) t += kTwoPi;
+  for (double t : {std::atan2(b * c - a * q, a * c + b * q), std::atan2(b * c + a * q, a * c - b * q)}) {
+    t = wrap_after(t, t_min);
     if (t <= t_max) out[n++] = t;
   }
   if (n == 2 && out[1] < out[0]) std::swap(out[0], out[1]);

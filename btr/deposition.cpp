@@ -235,6 +235,7 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
                                    const std::vector<Obstacle>& walls) {
   const double t_tol = 1e-13;
   Event ev{arc.t_end, {}, -1};
+  double screen_t = -1.0, screen = 5.0;  // root_screen of the event so far, for the parameter screen_t
 
   auto offer_sphere = [&](const Obstacle& o) {
     if (active.has(o.key)) return;
@@ -248,7 +249,8 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
     // (round-off puts a root there) and look for the next crossing.
     const bool touching = std::abs(K + a - R2) <= 1e-9 * R2;
     if (touching && b < -2.0 * kApproach * arc.rho * o.R) { ev.offer(0.0, o, t_tol); return; }
-    double t = first_rising_root(-a, -b, K - R2, touching ? kSkipTangency : 0.0, ev.t + t_tol);
+    if (screen_t != ev.t) screen_t = ev.t, screen = root_screen(ev.t + t_tol);
+    double t = first_rising_root(-a, -b, K - R2, touching ? kSkipTangency : 0.0, ev.t + t_tol, screen);
     if (t >= 0.0) ev.offer(t, o, t_tol);
   };
   auto offer_plane = [&](const Obstacle& o) {

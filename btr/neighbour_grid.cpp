@@ -55,12 +55,15 @@ NeighbourGrid::NeighbourGrid(int dimension, const Container& c, double r_max)
 namespace {
 
 // A query over more periods than image codes tell apart (a period far below the grain size).
-void check_images(long lo, long hi, long n, const char* axis) {
-  const long limit = (NeighbourGrid::kMaxImageShift - 2) * n;
-  if (lo < -limit || hi > limit)
+[[noreturn]] void too_many_images(const char* axis) {
     throw std::length_error(std::string("neighbour query spans more than ") +
                             std::to_string(NeighbourGrid::kMaxImageShift - 2) + " periods in " + axis +
                             ": the period is too small against the grain size");
+}
+
+inline void check_images(long lo, long hi, long n, const char* axis) {
+  const long limit = (NeighbourGrid::kMaxImageShift - 2) * n;
+  if (lo < -limit || hi > limit) too_many_images(axis);
 }
 
 // Floor of v as a column index; v must be finite (checked by the caller for inserted centres; a
