@@ -127,7 +127,8 @@ double first_tube_exit(const CircleArc& arc, const Vec3& point, int axis, double
         continue;
       }
       if (s.fhi <= level && h <= kTol) break;  // grazes the surface from inside within round-off: no exit
-      if (fm + std::abs(f.slope(m)) * h + 0.5 * second * h * h <= level) break;  // inside throughout
+      // Inside throughout (an interval that ends outside always holds an exit, whatever round-off says).
+      if (s.fhi <= level && fm + std::abs(f.slope(m)) * h + 0.5 * second * h * h <= level) break;
       if (n == 200) break;  // unreachable: the depth is at most log2(2 pi / kTol) < 50
       stack[n++] = {m, s.hi, fm, s.fhi};
       s = {s.lo, m, s.flo, fm};

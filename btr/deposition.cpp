@@ -208,12 +208,14 @@ void Deposition::Impl::fall(Vec3& x, double r, Contacts& active, const std::vect
       x.x(), x.y(), reach, x.z() + reach,
       [&](double layer_top) { return layer_top + reach > x.z() - ev.t; },
       [&](std::int32_t i, const Vec3& centre, double radius, int image) {
-        Obstacle o = sphere(i, centre, radius, image, r);
-        const double dx = x.x() - o.c.x(), dy = x.y() - o.c.y();
-        const double s = o.R * o.R - dx * dx - dy * dy;
-        if (s <= 1e-12 * o.R * o.R) return;  // passes beside it (or grazes its equator)
-        const double z_hit = o.c.z() + std::sqrt(s);
-        if (z_hit > x.z() + tol || active.has(o.key)) return;
+        const double R = r + radius;
+        const double dx = x.x() - centre.x(), dy = x.y() - centre.y();
+        const double s = R * R - dx * dx - dy * dy;
+        if (s <= 1e-12 * R * R) return;  // passes beside it (or grazes its equator)
+        const double z_hit = centre.z() + std::sqrt(s);
+        if (z_hit > x.z() + tol) return;
+        const Obstacle o = sphere(i, centre, radius, image, r);
+        if (active.has(o.key)) return;
         ev.offer(x.z() - z_hit, o, tol);
       });
   if (container.kind == ContainerKind::Drum) {
@@ -836,6 +838,12 @@ std::int32_t Deposition::place_cluster(const ClusterDrop& drop) {
   Impl& d = *impl_;
   ClusterEngine engine{d.dimension, d.container, d.r_max, d.max_events, d.grains, d.grid, d.top, d.clusters};
   return place_rigid_cluster(engine, drop);
+}
+void Deposition::prefetch(const Drop& drop, int ahead) const {
+  const Impl& d = *impl_;
+  if (ahead < 0 || ahead > 2 || !(drop.r > 0.0)) return;
+  d.grid.prefetch(drop.x, d.dimension == 3 ? drop.y : 0.0, drop.r + d.r_max,
+                  std::isnan(drop.z) ? std::numeric_limits<double>::infinity() : drop.z + drop.r + d.r_max, 2 - ahead);
 }
 const Grains& Deposition::grains() const { return impl_->grains; }
 Grains Deposition::release() {

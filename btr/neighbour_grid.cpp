@@ -1,6 +1,7 @@
 #include "btr/neighbour_grid.h"
 
 #include <algorithm>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -83,6 +84,37 @@ NeighbourGrid::Range NeighbourGrid::y_range(double lo, double hi) const {
   const Range r{index_of((lo - y0_) / hy_), index_of((hi - y0_) / hy_)};
   if (wrap_y_) check_images(r.lo, r.hi, ny_, "y");
   return r;
+}
+
+void NeighbourGrid::prefetch(double x, double y, double reach, double z, int stage) const {
+  if (!std::isfinite(x) || !std::isfinite(y)) return;
+  const Range rx = x_range(x - reach, x + reach), ry = y_range(y - reach, y + reach);
+  const long iz = std::isfinite(z) ? std::max(0L, index_of(z / h_)) : std::numeric_limits<long>::max();
+  for (long iy = ry.lo; iy <= ry.hi; ++iy) {
+    long wy = iy;
+    if (wrap_y_) wy = iy - floor_div(iy, ny_) * ny_;
+    else if (iy < iy0_ || iy >= iy0_ + ny_) continue;
+    for (long ix = rx.lo; ix <= rx.hi; ++ix) {
+      long wx = ix;
+      if (wrap_x_) wx = ix - floor_div(ix, nx_) * nx_;
+      else if (ix < ix0_ || ix >= ix0_ + nx_) continue;
+      const Column& column = columns_[column_of(wx, wy)];
+      if (stage == 0) {
+        __builtin_prefetch(&column);
+        continue;
+      }
+      const long layers = column.layers();
+      if (layers == 0) continue;
+      const long top = std::min(layers - 1, iz);
+      if (stage == 1) {
+        __builtin_prefetch(column.start.data() + std::max(0L, top - 1));
+        continue;
+      }
+      const char* begin = reinterpret_cast<const char*>(column.entries.data() + column.start[std::max(0L, top - 1)]);
+      const char* end = reinterpret_cast<const char*>(column.entries.data() + column.start[top + 1]);
+      for (int line = 0; line < 8 && begin + 64 * line < end; ++line) __builtin_prefetch(begin + 64 * line);
+    }
+  }
 }
 
 // An open floor's grid grows towards the column that is outside it, on that side only, at least

@@ -26,6 +26,12 @@ class NeighbourGrid {
   static int image_code(long kx, long ky) {
     return static_cast<int>(((kx + kMaxImageShift) << 15) | (ky + kMaxImageShift));
   }
+  // A hint (no effect on any result): the columns meeting [x -+ reach] x [y -+ reach] will be read from
+  // height z down (z = +inf: from their top). Stage 0 asks for the columns' headers, stage 1 for their
+  // layer tables, stage 2 for the entries of the two layers at z; a caller issues the stages for a
+  // drop two, one and zero steps ahead, so each stage finds the memory the one before asked for.
+  void prefetch(double x, double y, double reach, double z, int stage) const;
+
   // Columns held (an open floor grows them as the heap spreads).
   std::size_t column_count() const { return columns_.size(); }
 

@@ -156,6 +156,65 @@ TEST(HotLoopCorners, GrazingExitFromTheCylinderIsFound) {
   EXPECT_LT(first_tube_exit(arc, Vec3::Zero(), 2, 1.0, arc.t_end), 0.0);
 }
 
+TEST(HotLoopCorners, TubeExitAtTheEndOfAnArcIsFound) {
+  // An arc of a drum3d redeposition (drum radius 15 mm) that leaves the drum's centre surface near its
+  // end: an exit whose last bisection interval round-off made look inside throughout must still count.
+  CircleArc arc;
+  arc.C = Vec3(0.0027659932045600096, 0.00041907619787771128, 0.0012201761122908827);
+  arc.rho = 0.0016221990761889921;
+  arc.u = Vec3(0.51024963954380809, -0.066054279025745205, 0.85748594015750668);
+  arc.v = Vec3(0.85038989471483428, -0.11008707705582818, -0.5145073978401058);
+  arc.t_end = 1.030363249199471;
+  const Vec3 axis(0, 0, 0.015);
+  const double R = 0.014323112567822781;
+  auto gap = [&](double t) {  // distance from the axis minus R, by hand
+    const Vec3 p = arc.at(t);
+    return std::hypot(p.x(), p.z() - axis.z()) - R;
+  };
+  ASSERT_LT(gap(0.0), 0.0);
+  ASSERT_GT(gap(arc.t_end), 0.0);
+  const double t = first_tube_exit(arc, axis, 1, R, arc.t_end);
+  ASSERT_GE(t, 0.0);
+  EXPECT_NEAR(gap(t), 0.0, 1e-12 * R);
+  for (int k = 0; k < 1000; ++k) EXPECT_LE(gap(t * k / 1000), 1e-12 * R);
+}
+
+TEST(HotLoopCorners, TubeExitAgreesWithDenseSampling) {
+  // Random arcs about a unit tube (axis z): the exit found is the first crossing that 20000 samples see,
+  // to a sample spacing, and never later than it.
+  std::uint64_t state = 12345;
+  auto uniform = [&] {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return double(state >> 11) * 0x1.0p-53;
+  };
+  int exits = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    CircleArc arc;
+    arc.C = Vec3(1.6 * uniform() - 0.8, 1.6 * uniform() - 0.8, uniform());
+    arc.rho = 0.05 + 0.5 * uniform();
+    const Vec3 u = Vec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5).normalized();
+    arc.u = u;
+    arc.v = (Vec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5).cross(u)).normalized();
+    arc.t_end = kTwoPi * uniform();
+    auto f = [&](double t) { return std::hypot(arc.at(t).x(), arc.at(t).y()) - 1.0; };
+    if (f(0.0) >= 0.0) continue;
+    const int samples = 20000;
+    double first = -1.0;
+    for (int k = 1; k <= samples && first < 0.0; ++k)
+      if (f(arc.t_end * k / samples) > 0.0) first = arc.t_end * k / samples;
+    const double t = first_tube_exit(arc, Vec3::Zero(), 2, 1.0, arc.t_end);
+    if (first >= 0.0) {
+      ++exits;
+      ASSERT_GE(t, 0.0) << "trial " << trial;
+      EXPECT_LE(t, first) << "trial " << trial;
+      EXPECT_GE(t, first - arc.t_end / samples - 1e-12) << "trial " << trial;
+    } else if (t >= 0.0) {
+      EXPECT_NEAR(f(t), 0.0, 1e-9) << "trial " << trial;  // an exit between samples: it must be real
+    }
+  }
+  EXPECT_GT(exits, 30);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Round-off beyond the cylinder and the drum wall (drop_misfit lets a drop reach 1e-12 r past a wall):
 // the grain is brought back inside, as for flat walls, instead of staying outside.
@@ -245,6 +304,7 @@ TEST(HotLoopCorners, FarDropOnAnOpenFloorIsAnErrorNotAnAllocation) {
     FAIL() << "a grid of 1e10 columns was built";
   } catch (const PlacementError& e) {
     EXPECT_EQ(e.grain_id(), 2);
+    EXPECT_NE(std::string(e.what()).find("columns (budget"), std::string::npos) << e.what();  // refused, not failed
   }
 }
 
