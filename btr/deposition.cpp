@@ -7,6 +7,8 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <new>
+#include <type_traits>
 #include <sstream>
 
 #include "btr/circle_arc.h"
@@ -33,11 +35,31 @@ std::uint64_t mix(std::uint64_t z) {
   return z ^ (z >> 31);
 }
 
+static_assert(std::is_trivially_destructible_v<Obstacle>, "Contacts never destroys its obstacles");
+
 // At most kMaxContacts (btr/descent.h); one more sets `overflow`, which the placement reports as an error.
+// The items are raw storage (only the first n are ever read) and a copy copies n of them: a Contacts is
+// built and copied at every event, and initialising kMaxContacts obstacles each time cost more than the
+// contacts' own work.
 struct Contacts {
-  Obstacle item[kMaxContacts];
+  struct Items {
+    alignas(Obstacle) unsigned char raw[kMaxContacts * sizeof(Obstacle)];
+    Obstacle& operator[](int i) { return reinterpret_cast<Obstacle*>(raw)[i]; }
+    const Obstacle& operator[](int i) const { return reinterpret_cast<const Obstacle*>(raw)[i]; }
+  } item;
   int n = 0;
   bool overflow = false;
+  Contacts() {}  // user-provided: `Contacts{}` leaves the items alone
+  Contacts(const Contacts& o) : n(o.n), overflow(o.overflow) {
+    for (int i = 0; i < n; ++i) new (&item[i]) Obstacle(o.item[i]);
+  }
+  Contacts& operator=(const Contacts& o) {
+    if (this == &o) return *this;
+    n = o.n;
+    overflow = o.overflow;
+    for (int i = 0; i < n; ++i) new (&item[i]) Obstacle(o.item[i]);
+    return *this;
+  }
   bool has(std::int64_t key) const {
     for (int i = 0; i < n; ++i)
       if (item[i].key == key) return true;
@@ -45,7 +67,7 @@ struct Contacts {
   }
   void add(const Obstacle& o) {
     if (has(o.key)) return;
-    if (n < kMaxContacts) item[n++] = o;
+    if (n < kMaxContacts) new (&item[n++]) Obstacle(o);
     else overflow = true;
   }
   void add_all(const Contacts& other) {
