@@ -51,13 +51,15 @@ double first_rising_root(double a, double b, double c, double t_min, double t_ma
   return t <= t_max ? t : -1.0;
 }
 
-int trig_roots(double a, double b, double c, double t_min, double t_max, double out[2]) {
+int trig_roots(double a, double b, double c, double t_min, double t_max, double out[2], double screen) {
   const double A2 = a * a + b * b;
   if (A2 <= 0.0 || c * c > A2) return 0;
   const double q = std::sqrt(A2 - c * c);
   int n = 0;
-  for (double t : {std::atan2(b * c - a * q, a * c + b * q), std::atan2(b * c + a * q, a * c - b * q)}) {
-    t = wrap_after(t, t_min);
+  const double ys[2] = {b * c - a * q, b * c + a * q}, xs[2] = {a * c + b * q, a * c - b * q};
+  for (int k = 0; k < 2; ++k) {
+    if (screen < 5.0 && pseudo_angle(xs[k], ys[k]) > screen) continue;
+    const double t = wrap_after(std::atan2(ys[k], xs[k]), t_min);
     if (t <= t_max) out[n++] = t;
   }
   if (n == 2 && out[1] < out[0]) std::swap(out[0], out[1]);

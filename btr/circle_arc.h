@@ -42,7 +42,8 @@ inline double root_screen(double t_max) {
 }
 
 // All t in (t_min, t_max] with a cos t + b sin t = c, ascending; returns how many (0, 1 or 2).
-int trig_roots(double a, double b, double c, double t_min, double t_max, double out[2]);
+// screen as for first_rising_root.
+int trig_roots(double a, double b, double c, double t_min, double t_max, double out[2], double screen = 5.0);
 
 // The arc inside a tube: the surface at distance R from the line through `point` along coordinate axis
 // `axis` (2: the vertical cylinder; 1: the drum). The squared distance from the line is the

@@ -262,12 +262,14 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
   double screen_t = -1.0, screen = 5.0;  // root_screen of the event so far, for the parameter screen_t
 
   auto offer_sphere = [&](const Obstacle& o) {
-    if (active.has(o.key)) return;
     const Vec3 w = arc.C - o.c;
+    const double R2 = o.R * o.R;
     const double K = w.squaredNorm() + arc.rho * arc.rho;
     const double a = 2.0 * arc.rho * w.dot(arc.u), b = 2.0 * arc.rho * w.dot(arc.v);
-    const double R2 = o.R * o.R;
-    if (K - std::sqrt(a * a + b * b) > R2 * (1.0 + 1e-9)) return;  // the whole circle passes outside
+    // The whole circle passes outside: min D = K - sqrt(a^2 + b^2) > R^2 (squared, without the root).
+    const double excess = K - R2 * (1.0 + 1e-9);
+    if (excess > 0.0 && excess * excess > a * a + b * b) return;
+    if (active.has(o.key)) return;
     // Distance squared D(t) = K + a cos t + b sin t; the grain enters where D falls through R^2.
     // Touching at the start: an event now if approaching; otherwise skip the tangency itself
     // (round-off puts a root there) and look for the next crossing.
@@ -353,7 +355,7 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
         c = 0.0;
       }
       double roots[2];
-      const int n = trig_roots(a, b, c, t_tol, ev.t, roots);
+      const int n = trig_roots(a, b, c, t_tol, ev.t, roots, root_screen(ev.t));
       for (int m = 0; m < n; ++m) {
         // Load of support k just after the root.
         const double t = std::min(roots[m] + 1e-7, 0.5 * (roots[m] + arc.t_end));
