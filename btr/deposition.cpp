@@ -330,12 +330,29 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
     else if (drum_container && w.is_floor()) continue;
     else offer_plane(w);
   }
+  // The grains near the arc, in two parts: first those near its first stretch (1.5 radii of
+  // travel), where a rolling grain usually meets the next one; only if no event is found there, those
+  // near the rest of the arc up to the event so far. An obstacle met before the event found lies near
+  // the part of the arc before it, so the first visit alone suffices when the event is in its part.
   const Vec3 reach = Vec3::Constant(r + r_max);
-  grid.visit_box(lo - reach, hi + reach, [&](std::int32_t i, const Vec3& c, double radius, int image) {
-    const double R = r + radius;
-    if ((c - c.cwiseMax(lo).cwiseMin(hi)).squaredNorm() > R * R) return;  // too far from the arc's box
-    offer_sphere(sphere(i, c, radius, image, r));
-  });
+  auto visit_part = [&](double t0, double t1) {
+    CircleArc part = arc;
+    const double c0 = std::cos(t0), s0 = std::sin(t0);
+    part.u = c0 * arc.u + s0 * arc.v;
+    part.v = c0 * arc.v - s0 * arc.u;
+    part.t_end = t1 - t0;
+    Vec3 plo, phi;
+    part.bounds(plo, phi);
+    if (t0 == 0.0) plo = plo.cwiseMin(x), phi = phi.cwiseMax(x);  // the start exactly, whatever round-off
+    grid.visit_box(plo - reach, phi + reach, [&](std::int32_t i, const Vec3& c, double radius, int image) {
+      const double R = r + radius;
+      if ((c - c.cwiseMax(plo).cwiseMin(phi)).squaredNorm() > R * R) return;  // too far from the part's box
+      offer_sphere(sphere(i, c, radius, image, r));
+    });
+  };
+  const double first = std::min(arc.t_end, 1.5 * r / arc.rho);
+  visit_part(0.0, first);
+  if (ev.t > first) visit_part(first, ev.t);
 
   // A support lifts off where its load changes sign: gravity's part normal to the path is then
   // parallel to the other support's normal, det(z, T(t), N_other(t)) = 0.
