@@ -137,23 +137,64 @@ void NeighbourGrid::visit_box(const Vec3& lo, const Vec3& hi, F&& f) const {
 template <class F, class G>
 void NeighbourGrid::visit_column_down(double x, double y, double reach, double z_start, G&& keep_going,
                                       F&& f) const {
+  // The columns are looked up once (a fall usually reads two or three layers of each); then layer by
+  // layer, in the order visit_cell_range would take them, with the first lines of each run prefetched.
+  struct Col {
+    const Column* column;
+    double sx, sy;
+    int image;
+  };
+  constexpr int kMaxCols = 64;
   Range rx = x_range(x - reach, x + reach), ry = y_range(y - reach, y + reach);
+  if ((rx.hi - rx.lo + 1) * (ry.hi - ry.lo + 1) > kMaxCols) {  // not reached with the reach of one grain
+    long top = -1;
+    for (long iy = ry.lo; iy <= ry.hi; ++iy)
+      for (long ix = rx.lo; ix <= rx.hi; ++ix) {
+        long wx = ix, wy = iy;
+        if (wrap_y_) wy = iy - floor_div(iy, ny_) * ny_;
+        else if (iy < iy0_ || iy >= iy0_ + ny_) continue;
+        if (wrap_x_) wx = ix - floor_div(ix, nx_) * nx_;
+        else if (ix < ix0_ || ix >= ix0_ + nx_) continue;
+        top = std::max<long>(top, columns_[column_of(wx, wy)].layers() - 1);
+      }
+    top = std::min<long>(top, static_cast<long>(std::floor(z_start / h_)));
+    for (long iz = top; iz >= 0; --iz) {
+      if (!keep_going((iz + 1) * h_)) return;
+      visit_cell_range(rx, ry, iz, iz, f);
+    }
+    return;
+  }
+  Col cols[kMaxCols];
+  int n = 0;
   long top = -1;
   for (long iy = ry.lo; iy <= ry.hi; ++iy) {
-    long wy = iy;
-    if (wrap_y_) wy = iy - floor_div(iy, ny_) * ny_;
+    long wy = iy, ky = 0;
+    if (wrap_y_) { ky = floor_div(iy, ny_); wy = iy - ky * ny_; }
     else if (iy < iy0_ || iy >= iy0_ + ny_) continue;
     for (long ix = rx.lo; ix <= rx.hi; ++ix) {
-      long wx = ix;
-      if (wrap_x_) wx = ix - floor_div(ix, nx_) * nx_;
+      long wx = ix, kx = 0;
+      if (wrap_x_) { kx = floor_div(ix, nx_); wx = ix - kx * nx_; }
       else if (ix < ix0_ || ix >= ix0_ + nx_) continue;
-      top = std::max<long>(top, columns_[column_of(wx, wy)].layers() - 1);
+      const Column& column = columns_[column_of(wx, wy)];
+      if (column.layers() == 0) continue;
+      top = std::max<long>(top, column.layers() - 1);
+      cols[n++] = Col{&column, kx * period_x_, ky * period_y_, image_code(kx, ky)};
     }
   }
   top = std::min<long>(top, static_cast<long>(std::floor(z_start / h_)));
   for (long iz = top; iz >= 0; --iz) {
     if (!keep_going((iz + 1) * h_)) return;
-    visit_cell_range(rx, ry, iz, iz, f);
+    for (int k = 0; k < n; ++k) {
+      const Column& column = *cols[k].column;
+      if (iz < column.layers()) __builtin_prefetch(column.entries.data() + column.start[iz]);
+    }
+    for (int k = 0; k < n; ++k) {
+      const Column& column = *cols[k].column;
+      if (iz >= column.layers()) continue;
+      const Entry* e = column.entries.data() + column.start[iz];
+      const Entry* end = column.entries.data() + column.start[iz + 1];
+      for (; e != end; ++e) f(e->index, Vec3(e->x + cols[k].sx, e->y + cols[k].sy, e->z), e->r, cols[k].image);
+    }
   }
 }
 
