@@ -295,8 +295,9 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
     const double t = first_tube_exit(arc, o.kind == Obstacle::Kind::Drum ? o.c : Vec3::Zero(), axis, o.R, ev.t + t_tol);
     if (t >= 0.0) ev.offer(t, o, t_tol);
   };
-  Vec3 lo, hi;
-  arc.bounds(lo, hi);
+  // The whole arc's box, for the drum's quick rejection only (the grains are gathered by parts below).
+  Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
+  if (container.kind == ContainerKind::Drum) arc.bounds(lo, hi);
   auto offer_drum = [&](const Obstacle& o) {
     if (active.has(o.key)) return;
     // The arc lies inside the drum's centre surface (its box does, or its circle does: the distance of
@@ -337,9 +338,11 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
   const Vec3 reach = Vec3::Constant(r + r_max);
   auto visit_part = [&](double t0, double t1) {
     CircleArc part = arc;
-    const double c0 = std::cos(t0), s0 = std::sin(t0);
-    part.u = c0 * arc.u + s0 * arc.v;
-    part.v = c0 * arc.v - s0 * arc.u;
+    if (t0 != 0.0) {
+      const double c0 = std::cos(t0), s0 = std::sin(t0);
+      part.u = c0 * arc.u + s0 * arc.v;
+      part.v = c0 * arc.v - s0 * arc.u;
+    }
     part.t_end = t1 - t0;
     Vec3 plo, phi;
     part.bounds(plo, phi);
