@@ -55,7 +55,10 @@ class NeighbourGrid {
   Range y_range(double lo, double hi) const;
   long column_of(long ix, long iy) const { return (ix - ix0_) + nx_ * (iy - iy0_); }
   void grow_to(long ix, long iy);
-  static long floor_div(long a, long b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+  static long floor_div(long a, long b) {
+    if (a >= 0 && a < b) return 0;  // inside the period: no division (the usual case)
+    return a >= 0 ? a / b : -((-a + b - 1) / b);
+  }
 
   template <class F>
   void visit_cell_range(Range rx, Range ry, long iz_lo, long iz_hi, F&& f) const;
