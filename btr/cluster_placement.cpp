@@ -181,7 +181,7 @@ void Placer::gather(double margin) {
     e_.grid.visit_box(p - reach, p + reach, [&](std::int32_t i, const Vec3& c, double radius, int image) {
       Obstacle o;
       o.kind = Obstacle::Kind::Sphere;
-      o.key = static_cast<std::int64_t>(i) * 81 + image;
+      o.key = sphere_key(i, image);
       o.c = c;
       o.R = r + radius;
       const double gap = o.gap(p);

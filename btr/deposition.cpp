@@ -7,6 +7,8 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <new>
+#include <type_traits>
 #include <sstream>
 
 #include "btr/circle_arc.h"
@@ -19,7 +21,6 @@
 namespace btr {
 namespace {
 
-constexpr int kMaxContacts = 8;
 // Arc parameter skipped after a tangency with a contact the grain is leaving (radians).
 constexpr double kSkipTangency = 1e-9;
 // A contact touched at the start of a path is met only if the path heads into it at least this
@@ -34,16 +35,44 @@ std::uint64_t mix(std::uint64_t z) {
   return z ^ (z >> 31);
 }
 
+static_assert(std::is_trivially_destructible_v<Obstacle>, "Contacts never destroys its obstacles");
+
+// At most kMaxContacts (btr/descent.h); one more sets `overflow`, which the placement reports as an error.
+// The items are raw storage (only the first n are ever read) and a copy copies n of them: a Contacts is
+// built and copied at every event, and initialising kMaxContacts obstacles each time cost more than the
+// contacts' own work.
 struct Contacts {
-  Obstacle item[kMaxContacts];
+  struct Items {
+    alignas(Obstacle) unsigned char raw[kMaxContacts * sizeof(Obstacle)];
+    Obstacle& operator[](int i) { return reinterpret_cast<Obstacle*>(raw)[i]; }
+    const Obstacle& operator[](int i) const { return reinterpret_cast<const Obstacle*>(raw)[i]; }
+  } item;
   int n = 0;
+  bool overflow = false;
+  Contacts() {}  // user-provided: `Contacts{}` leaves the items alone
+  Contacts(const Contacts& o) : n(o.n), overflow(o.overflow) {
+    for (int i = 0; i < n; ++i) new (&item[i]) Obstacle(o.item[i]);
+  }
+  Contacts& operator=(const Contacts& o) {
+    if (this == &o) return *this;
+    n = o.n;
+    overflow = o.overflow;
+    for (int i = 0; i < n; ++i) new (&item[i]) Obstacle(o.item[i]);
+    return *this;
+  }
   bool has(std::int64_t key) const {
     for (int i = 0; i < n; ++i)
       if (item[i].key == key) return true;
     return false;
   }
   void add(const Obstacle& o) {
-    if (!has(o.key) && n < kMaxContacts) item[n++] = o;
+    if (has(o.key)) return;
+    if (n < kMaxContacts) new (&item[n++]) Obstacle(o);
+    else overflow = true;
+  }
+  void add_all(const Contacts& other) {
+    for (int k = 0; k < other.n; ++k) add(other.item[k]);
+    overflow |= other.overflow;
   }
   void remove(int i) {
     for (int k = i; k + 1 < n; ++k) item[k] = item[k + 1];
@@ -60,6 +89,7 @@ struct Event {
     if (t_new < t - tol) {
       t = t_new;
       hits.n = 0;
+      hits.overflow = false;
       lift_off = -1;
     }
     if (t_new <= t + tol) hits.add(o);
@@ -85,7 +115,7 @@ struct Deposition::Impl {
   static Obstacle sphere(std::int32_t i, const Vec3& centre, double radius, int image, double r) {
     Obstacle o;
     o.kind = Obstacle::Kind::Sphere;
-    o.key = static_cast<std::int64_t>(i) * 81 + image;
+    o.key = sphere_key(i, image);
     o.c = centre;
     o.R = r + radius;
     return o;
@@ -102,7 +132,92 @@ struct Deposition::Impl {
   bool at_bottom(const Vec3& x, const Contacts& active) const;
   double free_start(double x, double y, double z, double r) const;
   Vec3 tie_break(const Vec3& x, const Contacts& active, std::uint64_t salt) const;
+  void check_periods(std::int64_t id) const;
+  void inside_footprint(double& px, double& py, double r) const;
+  void back_inside_walls(std::int64_t id, Vec3& x, double r) const;
+  static PlacementError too_many_contacts(std::int64_t id, const Vec3& x) {
+    std::ostringstream why;
+    why << "more than " << kMaxContacts << " simultaneous contacts at (" << x.x() << ", " << x.y() << ", " << x.z()
+        << "): the engine holds at most " << kMaxContacts;
+    return PlacementError(id, why.str());
+  }
 };
+
+// The neighbour grid tells periodic images apart up to NeighbourGrid::kMaxImageShift periods; a query
+// reaches at most ~16 r_max, so a period of r_max / 256 or more is safe.
+void Deposition::Impl::check_periods(std::int64_t id) const {
+  auto check = [&](double period, const char* axis) {
+    if (period * 256.0 >= r_max) return;
+    std::ostringstream why;
+    why << "the period " << period << " in " << axis << " is below r_max / 256 = " << r_max / 256.0
+        << ": periodic images that far apart cannot be told apart";
+    throw PlacementError(id, why.str());
+  };
+  if (wraps_x(container)) check(container.size_x, "x");
+  if (wraps_y(container, dimension)) check(container.size_y, "y");
+}
+
+// drop_misfit lets a drop reach 1e-12 r beyond a wall (round-off of the caller's arithmetic): such a
+// drop starts on the wall instead, so the grain cannot fall past it.
+void Deposition::Impl::inside_footprint(double& px, double& py, double r) const {
+  auto clamp_half = [&](double& v, double half) { v = std::clamp(v, -(half - r), half - r); };
+  switch (container.kind) {
+    case ContainerKind::Open:
+    case ContainerKind::Periodic:
+      break;
+    case ContainerKind::Box:
+      clamp_half(px, 0.5 * container.size_x);
+      if (dimension == 3) clamp_half(py, 0.5 * container.size_y);
+      break;
+    case ContainerKind::HeleShaw:
+      clamp_half(px, 0.5 * container.size_x);
+      clamp_half(py, 0.5 * container.gap);
+      break;
+    case ContainerKind::Cylinder: {
+      const double R = container.radius - r, h = std::hypot(px, py);
+      if (h > R) px *= R / h, py *= R / h;
+      break;
+    }
+    case ContainerKind::Drum:
+      clamp_half(px, container.radius);
+      if (dimension == 3 && !container.periodic_ends) clamp_half(py, 0.5 * container.size_y);
+      break;
+  }
+}
+
+// A grain rolling along a wall on grains that touch it creeps into it by round-off (~1e-10 r per
+// event, and the next grain rolling on it goes further): put it back on the wall, flat, cylinder or
+// drum. Farther than 1e-7 r beyond a wall it is no round-off: an error naming the grain.
+void Deposition::Impl::back_inside_walls(std::int64_t id, Vec3& x, double r) const {
+  const char* names[] = {"grain", "flat wall", "cylinder wall", "drum wall"};
+  for (const Obstacle& w : walls) {
+    const double g = w.gap(x);
+    if (!(g < 0.0)) continue;
+    if (g <= -1e-7 * r) {
+      std::ostringstream why;
+      why << "ends " << -g / r << " radii beyond the " << names[static_cast<int>(w.kind)] << " at (" << x.x() << ", "
+          << x.y() << ", " << x.z() << ")";
+      throw PlacementError(id, why.str());
+    }
+    switch (w.kind) {
+      case Obstacle::Kind::Plane: x -= g * w.c; break;
+      case Obstacle::Kind::Cylinder: {
+        // Onto the surface, then inwards by whole ulps until the gap is not negative.
+        const double s = w.R / std::hypot(x.x(), x.y());
+        x.x() *= s, x.y() *= s;
+        for (int k = 0; k < 4 && w.gap(x) < 0.0; ++k) x.x() *= 1.0 - 0x1p-52, x.y() *= 1.0 - 0x1p-52;
+        break;
+      }
+      case Obstacle::Kind::Drum: {
+        const double dz = x.z() - w.c.z(), s = w.R / std::sqrt(x.x() * x.x() + dz * dz);
+        x.x() *= s, x.z() = w.c.z() + dz * s;
+        for (int k = 0; k < 4 && w.gap(x) < 0.0; ++k) x.x() *= 1.0 - 0x1p-52, x.z() = w.c.z() + (x.z() - w.c.z()) * (1.0 - 0x1p-52);
+        break;
+      }
+      case Obstacle::Kind::Sphere: break;
+    }
+  }
+}
 
 // ---------------------------------------------------------------------------------------------
 // Fall: straight down to the highest contact below (DESIGN.md: z_j + sqrt((r + r_j)^2 - h^2)).
@@ -115,25 +230,27 @@ void Deposition::Impl::fall(Vec3& x, double r, Contacts& active, const std::vect
       x.x(), x.y(), reach, x.z() + reach,
       [&](double layer_top) { return layer_top + reach > x.z() - ev.t; },
       [&](std::int32_t i, const Vec3& centre, double radius, int image) {
-        Obstacle o = sphere(i, centre, radius, image, r);
-        const double dx = x.x() - o.c.x(), dy = x.y() - o.c.y();
-        const double s = o.R * o.R - dx * dx - dy * dy;
-        if (s <= 1e-12 * o.R * o.R) return;  // passes beside it (or grazes its equator)
-        const double z_hit = o.c.z() + std::sqrt(s);
-        if (z_hit > x.z() + tol || active.has(o.key)) return;
+        const double R = r + radius;
+        const double dx = x.x() - centre.x(), dy = x.y() - centre.y();
+        const double s = R * R - dx * dx - dy * dy;
+        if (s <= 1e-12 * R * R) return;  // passes beside it (or grazes its equator)
+        const double z_hit = centre.z() + std::sqrt(s);
+        if (z_hit > x.z() + tol) return;
+        const Obstacle o = sphere(i, centre, radius, image, r);
+        if (active.has(o.key)) return;
         ev.offer(x.z() - z_hit, o, tol);
       });
   if (container.kind == ContainerKind::Drum) {
     // The drum's lower wall below x: z = z_axis - sqrt(R^2 - x^2).
     const Obstacle& w = walls.back();
     const double s = w.R * w.R - x.x() * x.x();
-    if (s > 0.0 && !active.has(w.key)) {
+    if (s >= 0.0 && !active.has(w.key)) {  // s = 0: a start on the drum's side, level with the axis
       const double z_hit = w.c.z() - std::sqrt(s);
       if (z_hit <= x.z() + tol) ev.offer(x.z() - z_hit, w, tol);
     }
   }
   x.z() -= ev.t;
-  for (int k = 0; k < ev.hits.n; ++k) active.add(ev.hits.item[k]);
+  active.add_all(ev.hits);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -142,20 +259,24 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
                                    const std::vector<Obstacle>& walls) {
   const double t_tol = 1e-13;
   Event ev{arc.t_end, {}, -1};
+  double screen_t = -1.0, screen = 5.0;  // root_screen of the event so far, for the parameter screen_t
 
   auto offer_sphere = [&](const Obstacle& o) {
-    if (active.has(o.key)) return;
     const Vec3 w = arc.C - o.c;
+    const double R2 = o.R * o.R;
     const double K = w.squaredNorm() + arc.rho * arc.rho;
     const double a = 2.0 * arc.rho * w.dot(arc.u), b = 2.0 * arc.rho * w.dot(arc.v);
-    const double R2 = o.R * o.R;
-    if (K - std::sqrt(a * a + b * b) > R2 * (1.0 + 1e-9)) return;  // the whole circle passes outside
+    // The whole circle passes outside: min D = K - sqrt(a^2 + b^2) > R^2 (squared, without the root).
+    const double excess = K - R2 * (1.0 + 1e-9);
+    if (excess > 0.0 && excess * excess > a * a + b * b) return;
+    if (active.has(o.key)) return;
     // Distance squared D(t) = K + a cos t + b sin t; the grain enters where D falls through R^2.
     // Touching at the start: an event now if approaching; otherwise skip the tangency itself
     // (round-off puts a root there) and look for the next crossing.
     const bool touching = std::abs(K + a - R2) <= 1e-9 * R2;
     if (touching && b < -2.0 * kApproach * arc.rho * o.R) { ev.offer(0.0, o, t_tol); return; }
-    double t = first_rising_root(-a, -b, K - R2, touching ? kSkipTangency : 0.0, ev.t + t_tol);
+    if (screen_t != ev.t) screen_t = ev.t, screen = root_screen(ev.t + t_tol);
+    double t = first_rising_root(-a, -b, K - R2, touching ? kSkipTangency : 0.0, ev.t + t_tol, screen);
     if (t >= 0.0) ev.offer(t, o, t_tol);
   };
   auto offer_plane = [&](const Obstacle& o) {
@@ -167,27 +288,16 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
     double t = first_rising_root(-a, -b, g0, touching ? kSkipTangency : 0.0, ev.t + t_tol);
     if (t >= 0.0) ev.offer(t, o, t_tol);
   };
-  auto offer_cylinder = [&](const Obstacle& o) {
+  // The vertical cylinder and a drum (an arc out of the planes y = const): the squared distance from the
+  // axis is of degree 2 in cos t, sin t; its first rise through R^2 by branch and bound.
+  auto offer_tube = [&](const Obstacle& o, int axis) {
     if (active.has(o.key)) return;
-    // |P_h(t)| is not a trigonometric polynomial of degree one: sample, then bisect.
-    const int samples = 64;
-    double t0 = 0.0;
-    for (int k = 1; k <= samples; ++k) {
-      double t1 = ev.t * k / samples, g1 = o.gap(arc.at(t1));
-      if (g1 < 0.0) {
-        for (int it = 0; it < 100 && t1 - t0 > t_tol; ++it) {
-          double tm = 0.5 * (t0 + t1);
-          (o.gap(arc.at(tm)) < 0.0 ? t1 : t0) = tm;
-        }
-        ev.offer(t0, o, t_tol);
-        return;
-      }
-      t0 = t1;
-    }
+    const double t = first_tube_exit(arc, o.kind == Obstacle::Kind::Drum ? o.c : Vec3::Zero(), axis, o.R, ev.t + t_tol);
+    if (t >= 0.0) ev.offer(t, o, t_tol);
   };
-
-  Vec3 lo, hi;
-  arc.bounds(lo, hi);
+  // The whole arc's box, for the drum's quick rejection only (the grains are gathered by parts below).
+  Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
+  if (container.kind == ContainerKind::Drum) arc.bounds(lo, hi);
   auto offer_drum = [&](const Obstacle& o) {
     if (active.has(o.key)) return;
     // The arc lies inside the drum's centre surface (its box does, or its circle does: the distance of
@@ -198,7 +308,7 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
     const double cz = arc.C.z() - o.c.z();
     if (std::sqrt(arc.C.x() * arc.C.x() + cz * cz) + arc.rho < o.R * (1.0 - 1e-9)) return;
     if (std::abs(arc.u.y()) > 1e-12 || std::abs(arc.v.y()) > 1e-12) {
-      offer_cylinder(o);  // squared distance from the axis is of degree 2 in cos t, sin t: sample
+      offer_tube(o, 1);
       return;
     }
     // An arc in a plane y = const: squared distance from the axis D(t) = K + a cos t + b sin t; the
@@ -216,17 +326,36 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
   // In a drum the floor only touches the drum's lowest line, where the drum wall is met first.
   const bool drum_container = container.kind == ContainerKind::Drum;
   for (const Obstacle& w : walls) {
-    if (w.kind == Obstacle::Kind::Cylinder) offer_cylinder(w);
+    if (w.kind == Obstacle::Kind::Cylinder) offer_tube(w, 2);
     else if (w.kind == Obstacle::Kind::Drum) offer_drum(w);
     else if (drum_container && w.is_floor()) continue;
     else offer_plane(w);
   }
+  // The grains near the arc, in two parts: first those near its first stretch (1.5 radii of
+  // travel), where a rolling grain usually meets the next one; only if no event is found there, those
+  // near the rest of the arc up to the event so far. An obstacle met before the event found lies near
+  // the part of the arc before it, so the first visit alone suffices when the event is in its part.
   const Vec3 reach = Vec3::Constant(r + r_max);
-  grid.visit_box(lo - reach, hi + reach, [&](std::int32_t i, const Vec3& c, double radius, int image) {
-    const double R = r + radius;
-    if ((c - c.cwiseMax(lo).cwiseMin(hi)).squaredNorm() > R * R) return;  // too far from the arc's box
-    offer_sphere(sphere(i, c, radius, image, r));
-  });
+  auto visit_part = [&](double t0, double t1) {
+    CircleArc part = arc;
+    if (t0 != 0.0) {
+      const double c0 = std::cos(t0), s0 = std::sin(t0);
+      part.u = c0 * arc.u + s0 * arc.v;
+      part.v = c0 * arc.v - s0 * arc.u;
+    }
+    part.t_end = t1 - t0;
+    Vec3 plo, phi;
+    part.bounds(plo, phi);
+    if (t0 == 0.0) plo = plo.cwiseMin(x), phi = phi.cwiseMax(x);  // the start exactly, whatever round-off
+    grid.visit_box(plo - reach, phi + reach, [&](std::int32_t i, const Vec3& c, double radius, int image) {
+      const double R = r + radius;
+      if ((c - c.cwiseMax(plo).cwiseMin(phi)).squaredNorm() > R * R) return;  // too far from the part's box
+      offer_sphere(sphere(i, c, radius, image, r));
+    });
+  };
+  const double first = std::min(arc.t_end, 1.5 * r / arc.rho);
+  visit_part(0.0, first);
+  if (ev.t > first) visit_part(first, ev.t);
 
   // A support lifts off where its load changes sign: gravity's part normal to the path is then
   // parallel to the other support's normal, det(z, T(t), N_other(t)) = 0.
@@ -246,18 +375,13 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
         c = 0.0;
       }
       double roots[2];
-      const int n = trig_roots(a, b, c, t_tol, ev.t, roots);
+      const int n = trig_roots(a, b, c, t_tol, ev.t, roots, root_screen(ev.t));
       for (int m = 0; m < n; ++m) {
         // Load of support k just after the root.
         const double t = std::min(roots[m] + 1e-7, 0.5 * (roots[m] + arc.t_end));
         const Vec3 P = arc.at(t), T = arc.tangent(t);
         const Vec3 g_perp = z - z.dot(T) * T;
-        const Vec3 nk = active.item[k].normal(P), no = other.normal(P);
-        Eigen::Matrix2d A;
-        A << nk.dot(nk), nk.dot(no), no.dot(nk), no.dot(no);
-        Eigen::Vector2d rhs(nk.dot(g_perp), no.dot(g_perp));
-        const Eigen::Vector2d f = A.inverse() * rhs;
-        if (f(0) < 0.0 && roots[m] < ev.t - t_tol) {
+        if (unloads(g_perp, active.item[k].normal(P), other.normal(P)) && roots[m] < ev.t - t_tol) {
           ev.t = roots[m];
           ev.hits.n = 0;
           ev.lift_off = k;
@@ -269,7 +393,7 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
 
   x = arc.at(ev.t);
   if (ev.lift_off >= 0) active.remove(ev.lift_off);
-  for (int k = 0; k < ev.hits.n; ++k) active.add(ev.hits.item[k]);
+  active.add_all(ev.hits);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -311,11 +435,8 @@ bool Deposition::Impl::roll_along_cylinder(Vec3& x, double r, Contacts& active, 
     const Vec3 T = Vec3(sign * dPh.x(), sign * dPh.y(), sign * dz).normalized();
     const Vec3 g_perp = z - z.dot(T) * T;
     const Vec3 np = p.normal(P), nc = cyl.normal(P);
-    Eigen::Matrix2d A;
-    A << np.dot(np), np.dot(nc), nc.dot(np), nc.dot(nc);
-    const Eigen::Vector2d f2 = A.inverse() * Eigen::Vector2d(np.dot(g_perp), nc.dot(g_perp));
-    if (f2(0) < 0.0) return 2;
-    if (f2(1) < 0.0) return 3;
+    if (unloads(g_perp, np, nc)) return 2;
+    if (unloads(g_perp, nc, np)) return 3;
     return 0;
   };
   const double step = sign * 0.05 * r / Rc;
@@ -383,7 +504,10 @@ double Deposition::Impl::free_start(double x, double y, double z, double r) cons
 // up to the wall, the start moves inwards in steps of one radius to the first column with room.
 void Deposition::Impl::drum_start(Vec3& x, double z, double r) const {
   const double Rc = container.radius - r, za = container.radius;
-  const double x0 = x.x(), inward = x0 > 0.0 ? -1.0 : 1.0;
+  // At |x| = Rc the wall is vertical and level with the axis: gravity is tangent to it and the grain
+  // would alternate between meeting it and leaving it. A start there is moved 1e-12 Rc inwards.
+  const double edge = Rc * (1.0 - 1e-12);
+  const double x0 = std::clamp(x.x(), -edge, edge), inward = x0 > 0.0 ? -1.0 : 1.0;
   for (int k = 0; k * r <= std::abs(x0) + r; ++k) {
     const double xk = k * r >= std::abs(x0) ? 0.0 : x0 + inward * k * r;
     const double half_chord = std::sqrt(std::max(0.0, Rc * Rc - xk * xk));
@@ -463,11 +587,8 @@ bool Deposition::Impl::roll_along_drum(Vec3& x, double r, Contacts& active, int 
     const Vec3 T = Vec3(sign * dx, sign * dy, sign * dz).normalized();
     const Vec3 g_perp = z - z.dot(T) * T;
     const Vec3 np = p.normal(P), nc = drum.normal(P);
-    Eigen::Matrix2d A;
-    A << np.dot(np), np.dot(nc), nc.dot(np), nc.dot(nc);
-    const Eigen::Vector2d f2 = A.inverse() * Eigen::Vector2d(np.dot(g_perp), nc.dot(g_perp));
-    if (f2(0) < 0.0) return 2;
-    if (f2(1) < 0.0) return 3;
+    if (unloads(g_perp, np, nc)) return 2;
+    if (unloads(g_perp, nc, np)) return 3;
     return 0;
   };
   const double step = sign * 0.05 * r / Rc;
@@ -561,11 +682,18 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
     why << "radius " << r << " is not in (0, r_max = " << r_max << "]";
     throw PlacementError(id, why.str());
   }
+  if (!std::isfinite(drop.x) || (dimension == 3 && !std::isfinite(drop.y)) || std::isinf(drop.z)) {
+    std::ostringstream why;
+    why << "dropped at a non-finite position (" << drop.x << ", " << drop.y << ", " << drop.z << ")";
+    throw PlacementError(id, why.str());
+  }
+  check_periods(id);
   double px = drop.x, py = dimension == 3 ? drop.y : 0.0;
   if (wraps_x(container)) px -= container.size_x * std::floor(px / container.size_x + 0.5);
   if (wraps_y(container, dimension)) py -= container.size_y * std::floor(py / container.size_y + 0.5);
   const std::string misfit = drop_misfit(container, dimension, px, py, r);
   if (!misfit.empty()) throw PlacementError(id, "dropped outside the container: " + misfit);
+  inside_footprint(px, py, r);
 
   container_walls(container, dimension, r, walls);
   Vec3 x(px, py, 0.0);
@@ -578,6 +706,7 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
   int drum_stalls = 0;
   Vec3 blocked_tie = Vec3::Zero();  // the last tie-break roll that could not move the grain
   for (int event = 0; event < max_events && !stable; ++event) {
+    if (active.overflow) throw too_many_contacts(id, x);
     bool tied = false;
     const Vec3 before_event = x;
     Vec3 normals[kMaxContacts];
@@ -726,17 +855,17 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
     if (active.n) why << ")";
     throw PlacementError(id, why.str());
   }
-  // A grain rolling along a wall on grains that touch it creeps into it by round-off (~1e-10 r per
-  // event, and the next grain rolling on it goes further): put it back on the wall.
-  for (const Obstacle& w : walls) {
-    if (w.kind != Obstacle::Kind::Plane) continue;
-    const double g = w.gap(x);
-    if (g < 0.0 && g > -1e-7 * r) x -= g * w.c;
-  }
+  if (active.overflow) throw too_many_contacts(id, x);
+  back_inside_walls(id, x, r);
   if (wraps_x(container)) x.x() -= container.size_x * std::floor(x.x() / container.size_x + 0.5);
   if (wraps_y(container, dimension)) x.y() -= container.size_y * std::floor(x.y() / container.size_y + 0.5);
+  if (!x.allFinite()) throw PlacementError(id, "the placement ended at a non-finite position");
+  try {
+    grid.insert(static_cast<std::int32_t>(grains.size()), x, r);
+  } catch (const std::exception& e) {  // an escaped grain, or an open floor's grid out of budget
+    throw PlacementError(id, e.what());
+  }
   grains.push_back(Grain{x, r, drop.species});
-  grid.insert(static_cast<std::int32_t>(grains.size() - 1), x, r);
   top = std::max(top, x.z() + r);
   return grains.back();
 }
@@ -753,6 +882,12 @@ std::int32_t Deposition::place_cluster(const ClusterDrop& drop) {
   Impl& d = *impl_;
   ClusterEngine engine{d.dimension, d.container, d.r_max, d.max_events, d.grains, d.grid, d.top, d.clusters};
   return place_rigid_cluster(engine, drop);
+}
+void Deposition::prefetch(const Drop& drop, int ahead) const {
+  const Impl& d = *impl_;
+  if (ahead < 0 || ahead > 2 || !(drop.r > 0.0)) return;
+  d.grid.prefetch(drop.x, d.dimension == 3 ? drop.y : 0.0, drop.r + d.r_max,
+                  std::isnan(drop.z) ? std::numeric_limits<double>::infinity() : drop.z + drop.r + d.r_max, 2 - ahead);
 }
 const Grains& Deposition::grains() const { return impl_->grains; }
 Grains Deposition::release() {

@@ -56,6 +56,10 @@ class Deposition {
   // members carry as Grain::cluster. Throws PlacementError naming the cluster.
   std::int32_t place_cluster(const ClusterDrop& drop);
 
+  // A hint that `drop` is placed `ahead` drops from now (2, 1 or 0 for the next): the memory its fall
+  // reads starts loading while the current grain is placed. No effect on any result.
+  void prefetch(const Drop& drop, int ahead) const;
+
   const Grains& grains() const;
   // Hands the placed grains over (the engine is empty afterwards); saves a copy of a large packing.
   Grains release();

@@ -1,6 +1,7 @@
 #include "btr/descent.h"
 
 #include <Eigen/Dense>
+#include <stdexcept>
 
 namespace btr {
 namespace {
@@ -8,8 +9,21 @@ namespace {
 constexpr double kForceEps = 1e-12;
 constexpr double kFeasibleEps = 1e-12;
 
+// The dot products the subsets share, computed once per descent (the same products, so the same bits).
+struct Products {
+  double gram[kMaxContacts][kMaxContacts];
+  double rhs[kMaxContacts];  // -n_i . g
+  Products(const Vec3* n, std::size_t count) : rhs{} {
+    const Vec3 g(0.0, 0.0, -1.0);
+    for (std::size_t i = 0; i < count; ++i) {
+      rhs[i] = -n[i].dot(g);
+      for (std::size_t j = 0; j <= i; ++j) gram[i][j] = gram[j][i] = n[i].dot(n[j]);
+    }
+  }
+};
+
 // Tries one active subset: d = g + sum lambda_i n_i with n_i . d = 0 on the subset.
-bool try_subset(const Vec3* n, std::size_t count, unsigned mask, Descent& out) {
+bool try_subset(const Vec3* n, const Products& p, std::size_t count, unsigned mask, Descent& out) {
   const Vec3 g(0.0, 0.0, -1.0);
   int idx[3];
   int k = 0;
@@ -21,8 +35,8 @@ bool try_subset(const Vec3* n, std::size_t count, unsigned mask, Descent& out) {
     Eigen::Matrix3d gram = Eigen::Matrix3d::Identity();
     Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
     for (int a = 0; a < k; ++a) {
-      for (int b = 0; b < k; ++b) gram(a, b) = n[idx[a]].dot(n[idx[b]]);
-      rhs(a) = -n[idx[a]].dot(g);
+      for (int b = 0; b < k; ++b) gram(a, b) = p.gram[idx[a]][idx[b]];
+      rhs(a) = p.rhs[idx[a]];
     }
     // Reject dependent normals (supports on one line, a repeated contact): another subset covers them.
     Eigen::Vector3d l = Eigen::Vector3d::Zero();
@@ -56,18 +70,23 @@ bool try_subset(const Vec3* n, std::size_t count, unsigned mask, Descent& out) {
 }  // namespace
 
 Descent descend(const Vec3* normals, std::size_t count) {
-  // Subsets in order of size, then of index: the first feasible one is the answer, which makes
-  // degenerate cases (several subsets giving the same direction) deterministic.
-  const unsigned full = 1u << count;
-  for (unsigned size = 0; size <= 3; ++size) {
-    for (unsigned mask = 0; mask < full; ++mask) {
-      unsigned bits = 0;
-      for (unsigned m = mask; m; m &= m - 1) ++bits;
-      if (bits != size) continue;
-      Descent out;
-      if (try_subset(normals, count, mask, out)) return out;
-    }
-  }
+  if (count > static_cast<std::size_t>(kMaxContacts)) throw std::length_error("descend: more than kMaxContacts contacts");
+  // Subsets in order of size, then of index (as bit masks: the largest index first, then the next), so
+  // the first feasible one is the answer and degenerate cases (several subsets giving the same
+  // direction) are deterministic.
+  const int n = static_cast<int>(count);
+  const Products p(normals, count);
+  Descent out;
+  if (try_subset(normals, p, count, 0u, out)) return out;
+  for (int a = 0; a < n; ++a)
+    if (try_subset(normals, p, count, 1u << a, out)) return out;
+  for (int b = 1; b < n; ++b)
+    for (int a = 0; a < b; ++a)
+      if (try_subset(normals, p, count, (1u << a) | (1u << b), out)) return out;
+  for (int c = 2; c < n; ++c)
+    for (int b = 1; b < c; ++b)
+      for (int a = 0; a < b; ++a)
+        if (try_subset(normals, p, count, (1u << a) | (1u << b) | (1u << c), out)) return out;
   // Only reachable through round-off with more than three nearly dependent contacts: carried.
   return Descent{};
 }

@@ -1,7 +1,12 @@
 #include "btr/neighbour_grid.h"
 
+#include "btr/size_budget.h"
+
 #include <algorithm>
+#include <limits>
+#include <sstream>
 #include <stdexcept>
+#include <string>
 
 namespace btr {
 
@@ -50,20 +55,96 @@ NeighbourGrid::NeighbourGrid(int dimension, const Container& c, double r_max)
   columns_.resize(static_cast<std::size_t>(nx_ * ny_));
 }
 
+namespace {
+
+// A query over more periods than image codes tell apart (a period far below the grain size).
+[[noreturn]] void too_many_images(const char* axis) {
+    throw std::length_error(std::string("neighbour query spans more than ") +
+                            std::to_string(NeighbourGrid::kMaxImageShift - 2) + " periods in " + axis +
+                            ": the period is too small against the grain size");
+}
+
+inline void check_images(long lo, long hi, long n, const char* axis) {
+  const long limit = (NeighbourGrid::kMaxImageShift - 2) * n;
+  if (lo < -limit || hi > limit) too_many_images(axis);
+}
+
+// Floor of v as a column index; v must be finite (checked by the caller for inserted centres; a
+// query box is built from finite centres).
+long index_of(double v) { return static_cast<long>(std::floor(v)); }
+
+}  // namespace
+
 NeighbourGrid::Range NeighbourGrid::x_range(double lo, double hi) const {
-  return {static_cast<long>(std::floor((lo - x0_) / hx_)), static_cast<long>(std::floor((hi - x0_) / hx_))};
+  const Range r{index_of((lo - x0_) / hx_), index_of((hi - x0_) / hx_)};
+  if (wrap_x_) check_images(r.lo, r.hi, nx_, "x");
+  return r;
 }
 
 NeighbourGrid::Range NeighbourGrid::y_range(double lo, double hi) const {
   if (dimension_ == 2) return {0, 0};
-  return {static_cast<long>(std::floor((lo - y0_) / hy_)), static_cast<long>(std::floor((hi - y0_) / hy_))};
+  const Range r{index_of((lo - y0_) / hy_), index_of((hi - y0_) / hy_)};
+  if (wrap_y_) check_images(r.lo, r.hi, ny_, "y");
+  return r;
 }
 
+void NeighbourGrid::prefetch(double x, double y, double reach, double z, int stage) const {
+  if (!std::isfinite(x) || !std::isfinite(y)) return;
+  const Range rx = x_range(x - reach, x + reach), ry = y_range(y - reach, y + reach);
+  const long iz = std::isfinite(z) ? std::max(0L, index_of(z / h_)) : std::numeric_limits<long>::max();
+  for (long iy = ry.lo; iy <= ry.hi; ++iy) {
+    long wy = iy;
+    if (wrap_y_) wy = iy - floor_div(iy, ny_) * ny_;
+    else if (iy < iy0_ || iy >= iy0_ + ny_) continue;
+    for (long ix = rx.lo; ix <= rx.hi; ++ix) {
+      long wx = ix;
+      if (wrap_x_) wx = ix - floor_div(ix, nx_) * nx_;
+      else if (ix < ix0_ || ix >= ix0_ + nx_) continue;
+      const Column& column = columns_[column_of(wx, wy)];
+      if (stage == 0) {
+        __builtin_prefetch(&column);
+        continue;
+      }
+      const long layers = column.layers();
+      if (layers == 0) continue;
+      const long top = std::min(layers - 1, iz);
+      if (stage == 1) {
+        __builtin_prefetch(column.start.data() + std::max(0L, top - 1));
+        continue;
+      }
+      const char* begin = reinterpret_cast<const char*>(column.entries.data() + column.start[std::max(0L, top - 1)]);
+      const char* end = reinterpret_cast<const char*>(column.entries.data() + column.start[top + 1]);
+      for (int line = 0; line < 8 && begin + 64 * line < end; ++line) __builtin_prefetch(begin + 64 * line);
+    }
+  }
+}
+
+// An open floor's grid grows towards the column that is outside it, on that side only, at least
+// doubling its extent on that axis (amortised constant cost per grain as a heap spreads). A grid that
+// would exceed its budget (a grain dropped far from all the others) is refused, not allocated.
 void NeighbourGrid::grow_to(long ix, long iy) {
+  auto extend = [](long i, long& i0, long& n) {
+    if (i < i0) {
+      const long hi = i0 + n;
+      i0 = std::min(i, i0 - n);
+      n = hi - i0;
+    } else if (i >= i0 + n) {
+      n = std::max(i - i0 + 1, 2 * n);
+    }
+  };
   long new_ix0 = ix0_, new_nx = nx_, new_iy0 = iy0_, new_ny = ny_;
-  while (ix < new_ix0 || ix >= new_ix0 + new_nx) { new_ix0 -= new_nx / 2; new_nx *= 2; }
-  if (dimension_ == 3)
-    while (iy < new_iy0 || iy >= new_iy0 + new_ny) { new_iy0 -= new_ny / 2; new_ny *= 2; }
+  extend(ix, new_ix0, new_nx);
+  if (dimension_ == 3) extend(iy, new_iy0, new_ny);
+  // The same rule as the scene's up-front check (size_budget.h): a grid the scene's footprint allowed never
+  // hits it; a grid larger than half this machine's memory is refused instead of allocated.
+  const double budget = std::max(double(1L << 20), 0.5 * machine_memory_bytes() / double(sizeof(Column)));
+  if (double(new_nx) * double(new_ny) > budget) {
+    std::ostringstream why;
+    why << "centre " << ix - ix0_ << ", " << iy - iy0_ << " cells from the grid's corner: the open floor's neighbour "
+        << "grid would need " << double(new_nx) * double(new_ny) << " columns (budget " << budget
+        << "): a drop far away from all the other grains";
+    throw std::length_error(why.str());
+  }
   std::vector<Column> grown(static_cast<std::size_t>(new_nx * new_ny));
   for (long y = iy0_; y < iy0_ + ny_; ++y)
     for (long x = ix0_; x < ix0_ + nx_; ++x)
@@ -73,16 +154,32 @@ void NeighbourGrid::grow_to(long ix, long iy) {
 }
 
 void NeighbourGrid::insert(std::int32_t index, const Vec3& x, double r) {
-  long ix = static_cast<long>(std::floor((x.x() - x0_) / hx_));
-  long iy = dimension_ == 3 ? static_cast<long>(std::floor((x.y() - y0_) / hy_)) : 0;
+  if (!x.allFinite()) {
+    std::ostringstream why;
+    why << "grain index " << index << " has a non-finite centre (" << x.x() << ", " << x.y() << ", " << x.z() << ")";
+    throw std::out_of_range(why.str());
+  }
+  const double ux = (x.x() - x0_) / hx_, uy = dimension_ == 3 ? (x.y() - y0_) / hy_ : 0.0;
+  long ix = index_of(ux), iy = index_of(uy);
   if (grows_) {
     if (ix < ix0_ || ix >= ix0_ + nx_ || iy < iy0_ || iy >= iy0_ + ny_) grow_to(ix, iy);
   } else {
-    // A centre on a wall's cell edge is outside by round-off only.
-    ix = wrap_x_ ? ix - floor_div(ix, nx_) * nx_ : std::clamp(ix, ix0_, ix0_ + nx_ - 1);
-    iy = wrap_y_ ? iy - floor_div(iy, ny_) * ny_ : std::clamp(iy, iy0_, iy0_ + ny_ - 1);
+    // A centre on the grid's edge is outside by round-off only; farther out, the grain escaped.
+    auto bound = [&](double u, long i, long i0, long n, bool wrap, const char* axis) {
+      if (wrap) return i - floor_div(i, n) * n;
+      constexpr double kEdge = 1e-9;  // in cell widths
+      if (u < double(i0) - kEdge || u > double(i0 + n) + kEdge) {
+        std::ostringstream why;
+        why << "grain index " << index << " at (" << x.x() << ", " << x.y() << ", " << x.z() << ") is outside the "
+            << "container's grid in " << axis;
+        throw std::out_of_range(why.str());
+      }
+      return std::clamp(i, i0, i0 + n - 1);
+    };
+    ix = bound(ux, ix, ix0_, nx_, wrap_x_, "x");
+    iy = bound(uy, iy, iy0_, ny_, wrap_y_, "y");
   }
-  const long iz = std::max(0L, static_cast<long>(std::floor(x.z() / h_)));
+  const long iz = std::max(0L, index_of(x.z() / h_));
   Column& column = columns_[column_of(ix, iy)];
   if (column.start.empty()) column.start.push_back(0);
   if (column.layers() <= iz) {
@@ -92,6 +189,7 @@ void NeighbourGrid::insert(std::int32_t index, const Vec3& x, double r) {
   // At the end of layer iz; the layers above (usually none: grains mostly land on top) move up by one.
   column.entries.insert(column.entries.begin() + column.start[iz + 1], Entry{x.x(), x.y(), x.z(), r, index});
   for (std::size_t k = static_cast<std::size_t>(iz) + 1; k < column.start.size(); ++k) ++column.start[k];
+  ++count_;
 }
 
 }  // namespace btr

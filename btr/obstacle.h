@@ -11,10 +11,16 @@
 
 namespace btr {
 
+// The identity of one periodic image of fixed grain `index` (image: NeighbourGrid::image_code, below 2^30),
+// distinct for every grain and image, and non-negative (walls have negative keys).
+inline std::int64_t sphere_key(std::int32_t index, int image) {
+  return (static_cast<std::int64_t>(index) << 30) | static_cast<std::int64_t>(image);
+}
+
 struct Obstacle {
   enum class Kind : std::uint8_t { Sphere, Plane, Cylinder, Drum };
   Kind kind = Kind::Sphere;
-  std::int64_t key = 0;  // identity: grain index * 9 + image code for spheres, -1 - wall number for walls
+  std::int64_t key = 0;  // identity: sphere_key(grain index, image code) for spheres, -1 - wall number for walls
   Vec3 c = Vec3::Zero(); // sphere: centre (shifted to the image); plane: unit normal; drum: a point of the axis
   double R = 0.0;        // sphere: contact distance; plane: offset; cylinder: radius of the centre's surface
 

@@ -62,7 +62,32 @@ void container_walls(const Container& c, int dimension, double r, std::vector<Ob
   }
 }
 
+namespace {
+
+// Does the drop fit? (The hot path: no stream is built unless it does not.)
+bool drop_fits(const Container& c, int dimension, double x, double y, double r) {
+  const double slack = 1e-12 * r;
+  auto fits = [&](double v, double half) { return !(std::abs(v) > half - r + slack); };
+  switch (c.kind) {
+    case ContainerKind::Open:
+    case ContainerKind::Periodic:
+      return true;
+    case ContainerKind::Box:
+      return fits(x, 0.5 * c.size_x) && (dimension != 3 || fits(y, 0.5 * c.size_y));
+    case ContainerKind::HeleShaw:
+      return fits(x, 0.5 * c.size_x) && fits(y, 0.5 * c.gap);
+    case ContainerKind::Cylinder:
+      return !(std::hypot(x, y) > c.radius - r + slack);
+    case ContainerKind::Drum:
+      return fits(x, c.radius) && (dimension != 3 || c.periodic_ends || fits(y, 0.5 * c.size_y));
+  }
+  return false;
+}
+
+}  // namespace
+
 std::string drop_misfit(const Container& c, int dimension, double x, double y, double r) {
+  if (drop_fits(c, dimension, x, y, r)) return {};
   std::ostringstream why;
   const double slack = 1e-12 * r;
   auto check = [&](double v, double half, const char* axis) {

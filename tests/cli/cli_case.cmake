@@ -97,6 +97,19 @@ elseif(CASE STREQUAL "check")
   run_btr(r deposit "${scene}" -o "${WORK}/out" --check --quiet)
   expect_code(r 0)
 
+elseif(CASE STREQUAL "bench_scenes")
+  # The bench's three default scenes at toy sizes: a row each, the exponents and the depth ratio.
+  run_btr(r bench --sizes 300,600 --drum-sizes 150,300 --drum-steps 2)
+  expect_code(r 0)
+  foreach(needle "bed3d           300        300" "bed3d_deep      600        600" "drum3d          300        600"
+                 "B/grain" "exponent"
+                 "10x deeper bed / shallow bed" "N = 600")
+    expect_mentions(r "${needle}")
+  endforeach()
+  run_btr(bad bench --drum-steps 0)
+  expect_code(bad 2)
+  expect_mentions(bad "--drum-steps")
+
 elseif(CASE STREQUAL "missing_scene")
   run_btr(r deposit "${WORK}/no_such_scene.toml" -o "${WORK}/out")
   expect_code(r 2)
