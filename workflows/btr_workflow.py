@@ -164,7 +164,7 @@ def main(argv=None) -> int:
                                                "wavelength and contrast, top-toe segregation, angle per species; "
                                                "BTR 2D, BTR 3D cell, DEM pours with rolling friction off and on")
     st.add_argument("-o", "--out", help="output folder (default out/stratification)")
-    st.add_argument("--tiny", action="store_true", help="450 grains (150 in 2D), one seed, a 60 mm cell (for tests)")
+    st.add_argument("--tiny", action="store_true", help="700 grains (233 in 2D), one seed, a 60 mm cell (for tests)")
     st.add_argument("--seeds", help="comma-separated seeds (default 1,2,3)")
     st.add_argument("--n", type=int, help="grains of the 3D cases (default 3000; 2D: a third)")
 

@@ -1,7 +1,6 @@
 // The self-check itself, on configurations built by hand (no placement engine involved).
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cmath>
 
 #include "containers.h"
@@ -303,7 +302,7 @@ TEST(Check, NonFiniteOrEmptyGrainsAreOutside) {
 
 TEST(Check, LargeCubicStackIsFastAndOk) {
   // A simple cubic stack (each sphere on the one below) of 64^3 grains, shuffled, plus one broken
-  // grain: the check must find exactly that one and run in well under a few seconds.
+  // grain: the check must find exactly that one (its speed is measured by btr bench, not asserted here).
   const int n = 64;
   const double r = 1e-3;
   Grains g;
@@ -312,15 +311,12 @@ TEST(Check, LargeCubicStackIsFastAndOk) {
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) g.push_back(grain(2 * r * i, 2 * r * j, r + 2 * r * k, r));
   g.push_back(grain(2 * r * 10.5, 2 * r * 10, r + 2 * r * n + 1e-3 * r, r));  // hovering
-  const auto t0 = std::chrono::steady_clock::now();
   const CheckReport rep = check_packing(g, 3, open());
-  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_EQ(rep.overlaps, 0);
   EXPECT_EQ(rep.outside, 0);
   EXPECT_EQ(rep.unsupported, 1);
   ASSERT_FALSE(rep.examples.empty());
   EXPECT_EQ(rep.examples[0], std::int64_t(g.size()));
-  EXPECT_LT(s, 5.0);
 }
 
 }  // namespace

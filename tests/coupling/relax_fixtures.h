@@ -157,10 +157,21 @@ inline btr::Container container(btr::ContainerKind kind, double a = 0.02, double
   return c;
 }
 
+// The folder every fresh_dir of this test process lives in, removed when the process ends (set
+// BTR_KEEP_TEST_FILES to keep it for a look at a failed run's files). The process id keeps concurrent
+// test runs (other worktrees on the same machine) out of each other's way.
+struct TestFolder {
+  std::filesystem::path root = std::filesystem::temp_directory_path() /
+                               ("btr_coupling_test_" + std::to_string(::getpid()));
+  ~TestFolder() {
+    std::error_code ec;
+    if (!std::getenv("BTR_KEEP_TEST_FILES")) std::filesystem::remove_all(root, ec);
+  }
+};
+inline TestFolder test_folder;
+
 inline std::string fresh_dir(const std::string& name) {
-  // The process id keeps concurrent test runs (other worktrees on the same machine) out of each other's way.
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("btr_coupling_test_" + std::to_string(::getpid()) + "_" + name);
+  const auto dir = test_folder.root / name;
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir.string();

@@ -44,7 +44,7 @@ class ClusterRelax : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(ClusterRelax, ClustersRelaxAsRigidBodies) {
   const std::string engine = GetParam();
-  if (!btr_test::have_engine(engine)) GTEST_SKIP() << engine << " not installed";
+  if (!btr_test::have_engine(engine)) FAIL() << "scripts/setup.sh installs it: " << engine << " not installed";
   // A periodic bed too: members wrapped into the cell one by one must come together in their clump.
   for (const auto& [dimension, kind] : {std::pair{3, btr::ContainerKind::Box}, std::pair{2, btr::ContainerKind::Box},
                                         std::pair{3, btr::ContainerKind::Periodic}}) {
@@ -121,7 +121,7 @@ TEST_P(ClusterRelax, ClustersRelaxAsRigidBodies) {
 // the first member breaks the body, and its members' distances change as it turns.
 TEST_P(ClusterRelax, AClusterWiderThanHalfThePeriodicCellStaysInOnePiece) {
   const std::string engine = GetParam();
-  if (!btr_test::have_engine(engine)) GTEST_SKIP() << engine << " not installed";
+  if (!btr_test::have_engine(engine)) FAIL() << "scripts/setup.sh installs it: " << engine << " not installed";
   const double r = 1e-3, L = 14 * r, tilt = M_PI / 12, bond = 2 * r * std::cos(M_PI / 6);
   btr::Scene scene = btr_test::make_scene("wide_cluster", 3, btr_test::container(btr::ContainerKind::Periodic, L, L));
   scene.grains.components[0].material.young = 1e7;  // a longer stable step: a short test

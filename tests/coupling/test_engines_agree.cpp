@@ -44,7 +44,7 @@ double slab_fraction(const btr::Grains& grains, const btr::Container& c, double 
 // Both engines use the same time step, contact law family (Hertz with restitution-based viscous
 // damping), materials and stop rule; their tangential and damping details differ.
 TEST(EnginesAgree, PackingFractionAfterRelaxation) {
-  if (!on_path("liggghts")) GTEST_SKIP() << "liggghts not on PATH";
+  if (!on_path("liggghts")) FAIL() << "scripts/setup.sh installs it: " << "liggghts not on PATH";
   btr::Scene scene = btr_test::make_scene("agree", 3, btr_test::container(btr::ContainerKind::Periodic, 0.012, 0.012));
   scene.relax.max_time = 1.0;
   const btr::Packing bed = btr_bed(scene, 400, 7);

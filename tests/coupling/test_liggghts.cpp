@@ -130,7 +130,7 @@ TEST_P(LiggghtsContainers, InputsMatchTheContainer) {
 }
 
 TEST_P(LiggghtsContainers, RelaxesToTheStopRule) {
-  if (!have_liggghts()) GTEST_SKIP() << "liggghts not on PATH";
+  if (!have_liggghts()) FAIL() << "scripts/setup.sh installs it: " << "liggghts not on PATH";
   const Case c = GetParam();
   // Open floors get rolling friction: a sphere rolling on a flat floor never stops otherwise, and
   // grains spilled from the bed would keep the kinetic-energy stop rule from firing.
@@ -153,7 +153,7 @@ INSTANTIATE_TEST_SUITE_P(AllContainers, LiggghtsContainers, ::testing::ValuesIn(
 
 // Two species with different materials, Hooke contacts, rolling friction, 2 MPI ranks.
 TEST(Liggghts, MixtureHookeRollingMpi) {
-  if (!have_liggghts()) GTEST_SKIP() << "liggghts not on PATH";
+  if (!have_liggghts()) FAIL() << "scripts/setup.sh installs it: " << "liggghts not on PATH";
   const Case c{"mix", 3, container(ContainerKind::Box, 0.02, 0.02), 300};
   btr::Scene scene = btr_test::make_scene("mix", 3, c.container);
   btr::Component second = scene.grains.components[0];
@@ -253,7 +253,7 @@ std::string replace_line(std::string s, const std::string& prefix, const std::st
 }  // namespace
 
 TEST(Liggghts, BrokenInputIsReportedWithItsLog) {
-  if (!have_liggghts()) GTEST_SKIP() << "liggghts not on PATH";
+  if (!have_liggghts()) FAIL() << "scripts/setup.sh installs it: " << "liggghts not on PATH";
   std::string msg;
   run_broken("broken", [](std::string s) { return replace_line(s, "pair_style", "pair_style gran model nonsense"); },
              msg);
@@ -263,7 +263,7 @@ TEST(Liggghts, BrokenInputIsReportedWithItsLog) {
 }
 
 TEST(Liggghts, LostAtomsAreAFailure) {
-  if (!have_liggghts()) GTEST_SKIP() << "liggghts not on PATH";
+  if (!have_liggghts()) FAIL() << "scripts/setup.sh installs it: " << "liggghts not on PATH";
   std::string msg;
   // The floor moved 1 m down (the checks still read its forces): grains fall out of the box.
   run_broken("lost", [](std::string s) {
@@ -274,7 +274,7 @@ TEST(Liggghts, LostAtomsAreAFailure) {
 }
 
 TEST(Liggghts, BlowUpIsAFailure) {
-  if (!have_liggghts()) GTEST_SKIP() << "liggghts not on PATH";
+  if (!have_liggghts()) FAIL() << "scripts/setup.sh installs it: " << "liggghts not on PATH";
   std::string msg;
   // 40 times the stable step: Hertz contacts gain energy at every collision.
   run_broken("blowup",
@@ -292,7 +292,7 @@ TEST(Liggghts, BlowUpIsAFailure) {
 
 // LIGGGHTS' own estimate (fix check/timestep/gran) agrees with our Rayleigh time for glass.
 TEST(Liggghts, RayleighTimeAgreesWithLiggghtsCheck) {
-  if (!have_liggghts()) GTEST_SKIP() << "liggghts not on PATH";
+  if (!have_liggghts()) FAIL() << "scripts/setup.sh installs it: " << "liggghts not on PATH";
   btr::Scene scene = btr_test::make_scene("glass", 3, container(ContainerKind::Periodic));
   scene.grains.components[0].material.young = 63e9;
   scene.grains.components[0].material.poisson = 0.2;
@@ -328,7 +328,7 @@ TEST(Liggghts, RayleighTimeAgreesWithLiggghtsCheck) {
 // The script's own blow-up guard: with the bound lowered below any motion it must stop the run,
 // and the run must be reported as failed, not read back.
 TEST(Liggghts, KineticBoundInTheScriptEndsTheRun) {
-  if (!have_liggghts()) GTEST_SKIP() << "liggghts not on PATH";
+  if (!have_liggghts()) FAIL() << "scripts/setup.sh installs it: " << "liggghts not on PATH";
   std::string msg;
   run_broken("bound", [](std::string s) { return replace_line(s, "variable btr_bound", "variable btr_bound equal 1e-30"); },
              msg);
@@ -337,7 +337,7 @@ TEST(Liggghts, KineticBoundInTheScriptEndsTheRun) {
 
 // Real BTR packings (the project's own engine on the project's scenes) relax to the stop rule too.
 TEST(Liggghts, RealBtrPackings) {
-  if (!have_liggghts()) GTEST_SKIP() << "liggghts not on PATH";
+  if (!have_liggghts()) FAIL() << "scripts/setup.sh installs it: " << "liggghts not on PATH";
   for (const std::string name : {"box3d", "heap2d"}) {
     btr::Scene scene = btr::load_scene(std::string(BTR_SOURCE_DIR) + "/inputs/" + name + ".toml");
     scene.relax.max_time = 3.0;  // 0.2 s is the scenes' budget for studies; here: settle fully
@@ -357,7 +357,7 @@ TEST(Liggghts, RealBtrPackings) {
 
 // Young's moduli outside LIGGGHTS' SI range [5e6, 1e9] Pa need soft_particles / hard_particles.
 TEST(Liggghts, SoftMaterialRuns) {
-  if (!have_liggghts()) GTEST_SKIP() << "liggghts not on PATH";
+  if (!have_liggghts()) FAIL() << "scripts/setup.sh installs it: " << "liggghts not on PATH";
   btr::Scene scene = btr_test::make_scene("soft", 3, container(ContainerKind::Periodic, 0.015, 0.015));
   scene.grains.components[0].material.young = 1e6;
   const btr::Packing p = btr_test::layered_packing(scene, 100, 4);

@@ -187,7 +187,7 @@ TEST(TargetPhi, YadeRefusesTheCompactionWithRollingFriction) {
 class TargetPhiEngine : public ::testing::TestWithParam<std::string> {
  protected:
   void SetUp() override {
-    if (!have_engine(GetParam())) GTEST_SKIP() << GetParam() << " not installed";
+    if (!have_engine(GetParam())) FAIL() << "scripts/setup.sh installs it: " << GetParam() << " not installed";
   }
 };
 

@@ -48,7 +48,7 @@ btr::Scene rolling_scene(const std::string& name, btr::ContainerKind kind) {
 class StopRules : public ::testing::TestWithParam<std::string> {
  protected:
   void SetUp() override {
-    if (!have_engine(GetParam())) GTEST_SKIP() << GetParam() << " not installed";
+    if (!have_engine(GetParam())) FAIL() << "scripts/setup.sh installs it: " << GetParam() << " not installed";
   }
   std::string dir(const std::string& name) { return btr_test::fresh_dir("stop_" + GetParam() + "_" + name); }
 };

@@ -155,7 +155,7 @@ TEST_P(YadeContainers, ScriptMatchesTheContainer) {
 }
 
 TEST_P(YadeContainers, RelaxesToTheStopRule) {
-  if (!have_yade()) GTEST_SKIP() << "yade Python module not installed";
+  if (!have_yade()) FAIL() << "scripts/setup.sh installs it: " << "yade Python module not installed";
   const Case c = GetParam();
   // Open floors get rolling friction: a sphere rolling on a flat floor never stops otherwise.
   btr::Scene scene = c.container.kind == ContainerKind::Open
@@ -238,7 +238,7 @@ TEST(Yade, HookeMixture) {
             std::string::npos);
   EXPECT_NE(script.find("    pair(\"species1\", \"walls\", restitution=0.5, friction=0.5)"), std::string::npos);
 
-  if (!have_yade()) GTEST_SKIP() << "yade Python module not installed";
+  if (!have_yade()) FAIL() << "scripts/setup.sh installs it: " << "yade Python module not installed";
   const std::string run_dir = btr_test::fresh_dir("yade_mix_run");
   const btr::RelaxResult r = btr::relax(p, scene, "yade", {}, run_dir);
   check_relaxation(c, scene, p, r, run_dir);
@@ -321,7 +321,7 @@ std::string replace_once(std::string s, const std::string& what, const std::stri
 }  // namespace
 
 TEST(Yade, BrokenPackingIsReported) {
-  if (!have_yade()) GTEST_SKIP() << "yade Python module not installed";
+  if (!have_yade()) FAIL() << "scripts/setup.sh installs it: " << "yade Python module not installed";
   const std::string msg = run_broken("yade_broken_packing", "yade_packing.csv", [](std::string s) {
     const auto line3 = s.find("\n3,");
     return s.replace(line3 + 1, s.find(',', line3 + 3) - line3 - 1, "3,not-a-number");
@@ -331,14 +331,14 @@ TEST(Yade, BrokenPackingIsReported) {
 }
 
 TEST(Yade, BrokenScriptIsReported) {
-  if (!have_yade()) GTEST_SKIP() << "yade Python module not installed";
+  if (!have_yade()) FAIL() << "scripts/setup.sh installs it: " << "yade Python module not installed";
   const std::string msg = run_broken("yade_broken_script", "relax_yade.py",
                                      [](std::string s) { return replace_once(s, "    add_grains(", "    add_grainz("); });
   EXPECT_NE(msg.find("NameError"), std::string::npos) << msg;
 }
 
 TEST(Yade, BlowUpIsAFailure) {
-  if (!have_yade()) GTEST_SKIP() << "yade Python module not installed";
+  if (!have_yade()) FAIL() << "scripts/setup.sh installs it: " << "yade Python module not installed";
   // 40 times the stable step: Hertz contacts gain energy at every collision.
   const std::string msg = run_broken("yade_blowup", "relax_yade.py", [](std::string s) {
     const std::string line = line_starting(s, "TIMESTEP = ");
@@ -352,7 +352,7 @@ TEST(Yade, BlowUpIsAFailure) {
 
 // Without its floor the bed falls forever: the run reports grains below the floor.
 TEST(Yade, GrainsLeavingTheContainerAreAFailure) {
-  if (!have_yade()) GTEST_SKIP() << "yade Python module not installed";
+  if (!have_yade()) FAIL() << "scripts/setup.sh installs it: " << "yade Python module not installed";
   const std::string msg = run_broken("yade_no_floor", "relax_yade.py", [](std::string s) {
     s = replace_once(s, "    add_plane(axis=2, position=0)  # floor", "    pass  # floor removed");
     const std::string checks = line_starting(s, "MAX_CHECKS = ");
@@ -465,7 +465,7 @@ btr::Scene equal_grains_periodic_scene() {
 // this 6 mm period; YADE's collider then pairs two grains touching across the y boundary with the wrong
 // image, and one fell through the other (overlap 1.99 r, the grains nearly at the same place).
 TEST(Yade, EqualGrainsMeetAcrossThePeriodicBoundary) {
-  if (!have_yade()) GTEST_SKIP() << "yade Python module not installed";
+  if (!have_yade()) FAIL() << "scripts/setup.sh installs it: " << "yade Python module not installed";
   const btr::Scene scene = equal_grains_periodic_scene();
   btr::Packing p;
   p.grains = btr::run_scene(scene, 1, 60, {}).grains;

@@ -1,4 +1,4 @@
-"""stratification on tiny settings (450 grains in the 3D cell, 150 disks in 2D, one seed; LIGGGHTS pours for
+"""stratification on tiny settings (700 grains in the 3D cell, 233 disks in 2D, one seed; LIGGGHTS pours for
 real with rolling friction off and on), a failed case is a row with its reason, seed 003's Table I per
 species worked out by hand against the pour's input, and the report's tables on rows of known values."""
 import csv
@@ -34,7 +34,7 @@ def test_stratification_tiny(tmp_path, source_dir, btr_binary):
         assert abs(float(r["top_toe"]) - (float(r["small_top"]) - float(r["small_toe"]))) < 1e-9, r
         assert 0 <= float(r["small_top"]) <= 1 and 0 <= float(r["small_toe"]) <= 1
         assert float(r["cpu_s"]) >= 0 and float(r["wall_s"]) > 0
-    assert [r["n"] for r in rows] == ["150", "450", "450", "450"]
+    assert [r["n"] for r in rows] == ["233", "700", "700", "700"]
     # BTR has no inertia: its heaps are the steeper ones; the pours stopped by a rule of the pour
     assert min(theta["btr-2d"], theta["btr-3d"]) > max(theta["dem"], theta["dem-rolling"]) + 10, theta
     assert {r["stop"] for r in rows if r["method"].startswith("dem")} <= {"kinetic-energy", "max-time"}

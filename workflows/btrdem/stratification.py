@@ -35,7 +35,7 @@ LABELS = {"btr-2d": "BTR 2D (disks)", "btr-3d": "BTR 3D cell", "dem": "DEM pour,
           "dem-rolling": f"DEM pour, rolling friction {ROLLING:g}"}
 DEFAULT = {"n": 3000, "seeds": [1, 2, 3], "n2d_fraction": 1.0 / 3.0, "max_batches": 40, "pace": 1.0,
            "length_mm": 120.0}
-TINY = {"n": 450, "seeds": [1], "n2d_fraction": 1.0 / 3.0, "max_batches": 8, "pace": 1.0, "length_mm": 60.0,
+TINY = {"n": 700, "seeds": [1], "n2d_fraction": 1.0 / 3.0, "max_batches": 8, "pace": 1.0, "length_mm": 60.0,
         "max_time": 0.3}
 
 
