@@ -132,8 +132,6 @@ struct Deposition::Impl {
   bool at_bottom(const Vec3& x, const Contacts& active) const;
   double free_start(double x, double y, double z, double r) const;
   Vec3 tie_break(const Vec3& x, const Contacts& active, std::uint64_t salt) const;
-  void check_periods(std::int64_t id) const;
-  void inside_footprint(double& px, double& py, double r) const;
   void back_inside_walls(std::int64_t id, Vec3& x, double r) const;
   static PlacementError too_many_contacts(std::int64_t id, const Vec3& x) {
     std::ostringstream why;
@@ -142,48 +140,6 @@ struct Deposition::Impl {
     return PlacementError(id, why.str());
   }
 };
-
-// The neighbour grid tells periodic images apart up to NeighbourGrid::kMaxImageShift periods; a query
-// reaches at most ~16 r_max, so a period of r_max / 256 or more is safe.
-void Deposition::Impl::check_periods(std::int64_t id) const {
-  auto check = [&](double period, const char* axis) {
-    if (period * 256.0 >= r_max) return;
-    std::ostringstream why;
-    why << "the period " << period << " in " << axis << " is below r_max / 256 = " << r_max / 256.0
-        << ": periodic images that far apart cannot be told apart";
-    throw PlacementError(id, why.str());
-  };
-  if (wraps_x(container)) check(container.size_x, "x");
-  if (wraps_y(container, dimension)) check(container.size_y, "y");
-}
-
-// drop_misfit lets a drop reach 1e-12 r beyond a wall (round-off of the caller's arithmetic): such a
-// drop starts on the wall instead, so the grain cannot fall past it.
-void Deposition::Impl::inside_footprint(double& px, double& py, double r) const {
-  auto clamp_half = [&](double& v, double half) { v = std::clamp(v, -(half - r), half - r); };
-  switch (container.kind) {
-    case ContainerKind::Open:
-    case ContainerKind::Periodic:
-      break;
-    case ContainerKind::Box:
-      clamp_half(px, 0.5 * container.size_x);
-      if (dimension == 3) clamp_half(py, 0.5 * container.size_y);
-      break;
-    case ContainerKind::HeleShaw:
-      clamp_half(px, 0.5 * container.size_x);
-      clamp_half(py, 0.5 * container.gap);
-      break;
-    case ContainerKind::Cylinder: {
-      const double R = container.radius - r, h = std::hypot(px, py);
-      if (h > R) px *= R / h, py *= R / h;
-      break;
-    }
-    case ContainerKind::Drum:
-      clamp_half(px, container.radius);
-      if (dimension == 3 && !container.periodic_ends) clamp_half(py, 0.5 * container.size_y);
-      break;
-  }
-}
 
 // A grain rolling along a wall on grains that touch it creeps into it by round-off (~1e-10 r per
 // event, and the next grain rolling on it goes further): put it back on the wall, flat, cylinder or
@@ -687,13 +643,12 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
     why << "dropped at a non-finite position (" << drop.x << ", " << drop.y << ", " << drop.z << ")";
     throw PlacementError(id, why.str());
   }
-  check_periods(id);
   double px = drop.x, py = dimension == 3 ? drop.y : 0.0;
   if (wraps_x(container)) px -= container.size_x * std::floor(px / container.size_x + 0.5);
   if (wraps_y(container, dimension)) py -= container.size_y * std::floor(py / container.size_y + 0.5);
   const std::string misfit = drop_misfit(container, dimension, px, py, r);
   if (!misfit.empty()) throw PlacementError(id, "dropped outside the container: " + misfit);
-  inside_footprint(px, py, r);
+  onto_footprint(container, dimension, px, py, r);
 
   container_walls(container, dimension, r, walls);
   Vec3 x(px, py, 0.0);
@@ -874,6 +829,17 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
 Deposition::Deposition(int dimension, const Container& container, double r_max, int max_events_per_grain) {
   if (dimension != 2 && dimension != 3) throw std::invalid_argument("dimension must be 2 or 3");
   if (!(r_max > 0.0)) throw std::invalid_argument("r_max must be positive");
+  // The neighbour grid tells periodic images apart up to NeighbourGrid::kMaxImageShift periods; a query
+  // reaches at most ~16 r_max, so a period of r_max / 256 or more is safe.
+  auto check_period = [&](double period, const char* axis) {
+    if (period * 256.0 >= r_max) return;
+    std::ostringstream why;
+    why << "the period " << period << " in " << axis << " is below r_max / 256 = " << r_max / 256.0
+        << ": periodic images that far apart cannot be told apart";
+    throw std::invalid_argument(why.str());
+  };
+  if (wraps_x(container)) check_period(container.size_x, "x");
+  if (wraps_y(container, dimension)) check_period(container.size_y, "y");
   impl_ = std::make_unique<Impl>(dimension, container, r_max, max_events_per_grain);
 }
 Deposition::~Deposition() = default;

@@ -189,7 +189,6 @@ void NeighbourGrid::insert(std::int32_t index, const Vec3& x, double r) {
   // At the end of layer iz; the layers above (usually none: grains mostly land on top) move up by one.
   column.entries.insert(column.entries.begin() + column.start[iz + 1], Entry{x.x(), x.y(), x.z(), r, index});
   for (std::size_t k = static_cast<std::size_t>(iz) + 1; k < column.start.size(); ++k) ++column.start[k];
-  ++count_;
 }
 
 }  // namespace btr

@@ -63,7 +63,6 @@ class NeighbourGrid {
   template <class F>
   void visit_cell_range(Range rx, Range ry, long iz_lo, long iz_hi, F&& f) const;
 
-  std::size_t count_ = 0;  // grains inserted
   int dimension_;
   bool wrap_x_, wrap_y_;  // periodic axes (wraps_x, wraps_y of the container)
   bool grows_;       // open floor: the footprint is unknown in advance

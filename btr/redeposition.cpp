@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdio>
 #include <map>
 #include <numeric>
 #include <stdexcept>
@@ -11,6 +10,7 @@
 #include "btr/cluster.h"
 #include "btr/cluster_list.h"
 #include "btr/deposition.h"
+#include "btr/number_text.h"
 #include "btr/scene_toml.h"
 #include "btr/drops.h"
 #include "btr/metrics.h"
@@ -31,12 +31,6 @@ struct UnionFind {
     if (a != b) parent[std::max(a, b)] = std::min(a, b);
   }
 };
-
-std::string g6(double v) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%g", v);
-  return text;
-}
 
 double uniform(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
 

@@ -2,22 +2,18 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <vector>
+
+#include "btr/number_text.h"
 
 namespace btr {
 namespace {
 
-std::string g(double v) {
-  char text[40];
-  std::snprintf(text, sizeof text, "%g", v);
-  return text;
-}
-
 struct Length {
   std::string json_field, toml_field;
   double value;
+  bool positive = false;  // a container's dimension: > 0 (other lengths >= 0)
   const std::string& field(FieldNames n) const { return n == FieldNames::Toml ? toml_field : json_field; }
 };
 
@@ -54,21 +50,21 @@ std::vector<Length> lengths(const Scene& s) {
   switch (c.kind) {
     case ContainerKind::Box:
     case ContainerKind::Periodic:
-      out.push_back({"container.size_x", "container.size", c.size_x});
-      if (s.dimension == 3) out.push_back({"container.size_y", "container.size", c.size_y});
+      out.push_back({"container.size_x", "container.size", c.size_x, true});
+      if (s.dimension == 3) out.push_back({"container.size_y", "container.size", c.size_y, true});
       break;
     case ContainerKind::HeleShaw:
-      out.push_back({"container.size_x", "container.size", c.size_x});
-      out.push_back({"container.gap", "container.gap", c.gap});
+      out.push_back({"container.size_x", "container.size", c.size_x, true});
+      out.push_back({"container.gap", "container.gap", c.gap, true});
       break;
-    case ContainerKind::Cylinder: out.push_back({"container.radius", "container.radius", c.radius}); break;
+    case ContainerKind::Cylinder: out.push_back({"container.radius", "container.radius", c.radius, true}); break;
     case ContainerKind::Drum:
-      out.push_back({"container.radius", "container.radius", c.radius});
-      if (s.dimension == 3) out.push_back({"container.size_y", "container.length", c.size_y});
+      out.push_back({"container.radius", "container.radius", c.radius, true});
+      if (s.dimension == 3) out.push_back({"container.size_y", "container.length", c.size_y, true});
       break;
     case ContainerKind::Open: break;
   }
-  if (c.height > 0.0) out.push_back({"container.height", "container.height", c.height});
+  if (c.height != 0.0) out.push_back({"container.height", "container.height", c.height});  // 0: from the packing
   const SourceSpec& src = s.source;
   switch (src.kind) {
     case SourceSpec::Kind::Point:
@@ -105,33 +101,12 @@ std::optional<SceneProblem> scene_value_problem(const Scene& s, FieldNames names
   };
   auto problem_of = [&](const Length& l, const std::string& what) { return problem(l.json_field, l.toml_field, what); };
   // Signs and ranges (the TOML reader has checked these already; a packing's JSON may hold anything).
-  const Container& c = s.container;
-  for (const Length& l : lengths(s))
+  const std::vector<Length> ls = lengths(s);
+  for (const Length& l : ls) {
+    if (l.positive && !(std::isfinite(l.value) && l.value > 0.0))
+      return problem_of(l, "= " + g6(l.value) + ": expected a positive length [m]");
     if (!std::isfinite(l.value) || l.value < 0.0)
-      return problem_of(l, "= " + g(l.value) + ": expected a finite length >= 0 [m]");
-  auto positive = [&](const char* field, const char* toml, double v) -> std::optional<SceneProblem> {
-    if (std::isfinite(v) && v > 0.0) return std::nullopt;
-    return problem(field, toml, "= " + g(v) + ": expected a positive length [m]");
-  };
-  std::optional<SceneProblem> p;
-  switch (c.kind) {
-    case ContainerKind::Box:
-    case ContainerKind::Periodic:
-      if ((p = positive("container.size_x", "container.size", c.size_x))) return p;
-      if (s.dimension == 3 && (p = positive("container.size_y", "container.size", c.size_y))) return p;
-      break;
-    case ContainerKind::HeleShaw:
-      if ((p = positive("container.size_x", "container.size", c.size_x))) return p;
-      if ((p = positive("container.gap", "container.gap", c.gap))) return p;
-      break;
-    case ContainerKind::Cylinder:
-      if ((p = positive("container.radius", "container.radius", c.radius))) return p;
-      break;
-    case ContainerKind::Drum:
-      if ((p = positive("container.radius", "container.radius", c.radius))) return p;
-      if (s.dimension == 3 && (p = positive("container.size_y", "container.length", c.size_y))) return p;
-      break;
-    case ContainerKind::Open: break;
+      return problem_of(l, "= " + g6(l.value) + ": expected a finite length >= 0 [m]");
   }
   if (s.grains.count < 0)
     return problem("grains.count", "grains.count", "= " + std::to_string(s.grains.count) + ": expected a count >= 0");
@@ -140,54 +115,54 @@ std::optional<SceneProblem> scene_value_problem(const Scene& s, FieldNames names
     const std::string at = "grains.components[" + std::to_string(i) + "]";
     const std::string toml = s.grains.components.size() == 1 ? "grains" : "grains.component[" + std::to_string(i) + "]";
     if (!(std::isfinite(k.density) && k.density > 0.0))
-      return problem(at + ".density", toml + ".density", "= " + g(k.density) + ": expected a positive density [kg/m^3]");
+      return problem(at + ".density", toml + ".density", "= " + g6(k.density) + ": expected a positive density [kg/m^3]");
     if (!(std::isfinite(k.fraction) && k.fraction >= 0.0))
-      return problem(at + ".fraction", toml + ".fraction", "= " + g(k.fraction) + ": expected a fraction >= 0");
+      return problem(at + ".fraction", toml + ".fraction", "= " + g6(k.fraction) + ": expected a fraction >= 0");
     const Material& m = k.material;
     const std::string mat = at + ".material", tmat = toml + ".material";
     if (!(std::isfinite(m.young) && m.young > 0.0))
-      return problem(mat + ".young", tmat + ".young", "= " + g(m.young) + ": expected a positive Young's modulus [Pa]");
+      return problem(mat + ".young", tmat + ".young", "= " + g6(m.young) + ": expected a positive Young's modulus [Pa]");
     if (!(m.poisson >= 0.0 && m.poisson < 0.5))
-      return problem(mat + ".poisson", tmat + ".poisson", "= " + g(m.poisson) + ": expected a Poisson ratio in [0, 0.5)");
+      return problem(mat + ".poisson", tmat + ".poisson", "= " + g6(m.poisson) + ": expected a Poisson ratio in [0, 0.5)");
     if (!(m.restitution > 0.0 && m.restitution <= 1.0))
-      return problem(mat + ".restitution", tmat + ".restitution", "= " + g(m.restitution) + ": expected a restitution in (0, 1]");
+      return problem(mat + ".restitution", tmat + ".restitution", "= " + g6(m.restitution) + ": expected a restitution in (0, 1]");
     if (!(std::isfinite(m.friction) && m.friction >= 0.0))
-      return problem(mat + ".friction", tmat + ".friction", "= " + g(m.friction) + ": expected a friction coefficient >= 0");
+      return problem(mat + ".friction", tmat + ".friction", "= " + g6(m.friction) + ": expected a friction coefficient >= 0");
     if (!(std::isfinite(m.rolling_friction) && m.rolling_friction >= 0.0))
       return problem(mat + ".rolling_friction", tmat + ".rolling_friction",
-                     "= " + g(m.rolling_friction) + ": expected a rolling friction coefficient >= 0");
+                     "= " + g6(m.rolling_friction) + ": expected a rolling friction coefficient >= 0");
   }
   const RelaxSpec& r = s.relax;
   if (!(std::isfinite(r.max_time) && r.max_time > 0.0))
-    return problem("relax.max_time", "relax.max_time", "= " + g(r.max_time) + ": expected a positive time [s]");
+    return problem("relax.max_time", "relax.max_time", "= " + g6(r.max_time) + ": expected a positive time [s]");
   if (!(r.timestep_fraction > 0.0 && r.timestep_fraction <= 1.0))
     return problem("relax.timestep_fraction", "relax.timestep_fraction",
-                   "= " + g(r.timestep_fraction) + ": expected a fraction in (0, 1]");
+                   "= " + g6(r.timestep_fraction) + ": expected a fraction in (0, 1]");
   if (!(std::isfinite(r.stop_kinetic_ratio) && r.stop_kinetic_ratio > 0.0))
     return problem("relax.stop_kinetic_ratio", "relax.stop_kinetic_ratio",
-                   "= " + g(r.stop_kinetic_ratio) + ": expected a positive ratio");
+                   "= " + g6(r.stop_kinetic_ratio) + ": expected a positive ratio");
   if (!(r.damping >= 0.0 && r.damping < 1.0))
-    return problem("relax.damping", "relax.damping", "= " + g(r.damping) + ": expected a damping in [0, 1)");
+    return problem("relax.damping", "relax.damping", "= " + g6(r.damping) + ": expected a damping in [0, 1)");
 
   // Radii: positive, and within kMaxRadiusRatio of each other.
   const std::vector<Length> rs = radii(s);
   for (const Length& l : rs)
     if (!(std::isfinite(l.value) && l.value > 0.0))
-      return problem_of(l, "= " + g(l.value) + ": expected a positive radius [m]");
+      return problem_of(l, "= " + g6(l.value) + ": expected a positive radius [m]");
   if (rs.empty()) return std::nullopt;
   const auto [smallest, largest] =
       std::minmax_element(rs.begin(), rs.end(), [](const Length& a, const Length& b) { return a.value < b.value; });
   if (largest->value > kMaxRadiusRatio * smallest->value)
     return problem_of(*smallest,
-                   "= " + g(smallest->value) + " m is " + g(largest->value / smallest->value) +
-                       " times smaller than the largest radius (" + largest->field(names) + " = " + g(largest->value) +
-                       " m); expected grain radii within a factor " + g(kMaxRadiusRatio) + " of each other");
+                   "= " + g6(smallest->value) + " m is " + g6(largest->value / smallest->value) +
+                       " times smaller than the largest radius (" + largest->field(names) + " = " + g6(largest->value) +
+                       " m); expected grain radii within a factor " + g6(kMaxRadiusRatio) + " of each other");
   // Lengths against the smallest grain: beyond kMaxLengthRatio, rounding of the coordinates reaches the
   // precision the placement and its self-check are exact to.
-  for (const Length& l : lengths(s))
+  for (const Length& l : ls)
     if (l.value > kMaxLengthRatio * smallest->value)
-      return problem_of(l, "= " + g(l.value) + " m is " + g(l.value / smallest->value) + " times the smallest grain radius (" +
-                         smallest->field(names) + " = " + g(smallest->value) + " m); expected at most " + g(kMaxLengthRatio) +
+      return problem_of(l, "= " + g6(l.value) + " m is " + g6(l.value / smallest->value) + " times the smallest grain radius (" +
+                         smallest->field(names) + " = " + g6(smallest->value) + " m); expected at most " + g6(kMaxLengthRatio) +
                          " times: coordinates that large are rounded by more than the placement's precision");
   return std::nullopt;
 }

@@ -7,6 +7,7 @@
 #include <limits>
 #include <cstdio>
 
+#include "btr/number_text.h"
 #include "btr/scene_toml.h"
 
 namespace btr {
@@ -27,12 +28,6 @@ std::string rounded(double v) {
   return text;
 }
 
-std::string number(double v) {
-  char text[64];
-  std::snprintf(text, sizeof text, "%.6g", v);
-  return text;
-}
-
 }  // namespace
 
 double machine_memory_bytes() {
@@ -50,7 +45,7 @@ std::optional<std::string> count_does_not_fit(std::int64_t count, const std::str
   const double need = static_cast<double>(count) * kBytesPerGrain, have = machine_memory_bytes();
   if (have <= 0.0 || need <= have) return std::nullopt;
   return field + " = " + std::to_string(count) + ": " + std::to_string(count) + " grains need about " +
-         gigabytes(need) + " (" + number(kBytesPerGrain) + " bytes per grain), more than this machine's memory (" +
+         gigabytes(need) + " (" + g6(kBytesPerGrain) + " bytes per grain), more than this machine's memory (" +
          gigabytes(have) + "); expected at most about " + rounded(have / kBytesPerGrain) + " grains";
 }
 
@@ -58,8 +53,8 @@ std::optional<std::string> grid_does_not_fit(int dimension, double lx, double ly
                                              const std::string& field, double value) {
   const double need = grid_bytes(dimension, lx, ly, cell), have = machine_memory_bytes();
   if (have <= 0.0 || (std::isfinite(need) && need <= 0.5 * have)) return std::nullopt;
-  return field + " = " + number(value) + " m: the placement's neighbour grid over a footprint of " + number(lx) +
-         (dimension == 3 ? " x " + number(ly) : std::string()) + " m in cells of " + number(cell) +
+  return field + " = " + g6(value) + " m: the placement's neighbour grid over a footprint of " + g6(lx) +
+         (dimension == 3 ? " x " + g6(ly) : std::string()) + " m in cells of " + g6(cell) +
          " m (a largest grain diameter) needs about " + gigabytes(need) +
          ", more than half this machine's memory (" + gigabytes(have) + ")";
 }

@@ -210,16 +210,15 @@ Stratification stratification_measures(const Grains& grains, int dimension, cons
   std::vector<double> radius;
   std::vector<char> small;
   double deepest = 0.0;
+  int left = -1, right = -1;  // index in `sides`, -1: that side has no fitted line
+  for (std::size_t k = 0; k < sides.size(); ++k) (sides[k].name == "left" ? left : right) = static_cast<int>(k);
   for (std::size_t i = 0; i < grains.size(); ++i) {
     const Grain& g = grains[i];
     int side = 0;
     double u = 0.0;
     if (heap.by_sides) {
       const double c = g.x.x() - source_x;
-      const std::string want = c < 0 ? "left" : "right";
-      side = -1;
-      for (std::size_t k = 0; k < sides.size(); ++k)
-        if (sides[k].name == want) side = static_cast<int>(k);
+      side = c < 0 ? left : right;
       if (side < 0) continue;
       u = std::abs(c);
     } else {

@@ -1,5 +1,6 @@
 #include "btr/walls.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -64,60 +65,67 @@ void container_walls(const Container& c, int dimension, double r, std::vector<Ob
 
 namespace {
 
-// Does the drop fit? (The hot path: no stream is built unless it does not.)
-bool drop_fits(const Container& c, int dimension, double x, double y, double r) {
-  const double slack = 1e-12 * r;
-  auto fits = [&](double v, double half) { return !(std::abs(v) > half - r + slack); };
+// Where a drop's centre may be: within wall_x - r of the axis in x and wall_y - r in y on the bounded
+// axes, or, round (the cylinder), within wall_x - r of the z axis.
+struct Footprint {
+  bool round = false, bound_x = false, bound_y = false;
+  double wall_x = 0.0, wall_y = 0.0;
+};
+
+Footprint footprint(const Container& c, int dimension) {
+  Footprint f;
   switch (c.kind) {
     case ContainerKind::Open:
     case ContainerKind::Periodic:
-      return true;
+      break;
     case ContainerKind::Box:
-      return fits(x, 0.5 * c.size_x) && (dimension != 3 || fits(y, 0.5 * c.size_y));
+      f.bound_x = true, f.wall_x = 0.5 * c.size_x;
+      f.bound_y = dimension == 3, f.wall_y = 0.5 * c.size_y;
+      break;
     case ContainerKind::HeleShaw:
-      return fits(x, 0.5 * c.size_x) && fits(y, 0.5 * c.gap);
+      f.bound_x = f.bound_y = true, f.wall_x = 0.5 * c.size_x, f.wall_y = 0.5 * c.gap;
+      break;
     case ContainerKind::Cylinder:
-      return !(std::hypot(x, y) > c.radius - r + slack);
+      f.round = true, f.wall_x = c.radius;
+      break;
     case ContainerKind::Drum:
-      return fits(x, c.radius) && (dimension != 3 || c.periodic_ends || fits(y, 0.5 * c.size_y));
+      f.bound_x = true, f.wall_x = c.radius;
+      f.bound_y = dimension == 3 && !c.periodic_ends, f.wall_y = 0.5 * c.size_y;
+      break;
   }
-  return false;
+  return f;
 }
 
 }  // namespace
 
 std::string drop_misfit(const Container& c, int dimension, double x, double y, double r) {
-  if (drop_fits(c, dimension, x, y, r)) return {};
-  std::ostringstream why;
+  const Footprint f = footprint(c, dimension);
   const double slack = 1e-12 * r;
-  auto check = [&](double v, double half, const char* axis) {
-    if (std::abs(v) > half - r + slack)
-      why << axis << " = " << v << " puts a grain of radius " << r << " through the wall at +-" << half << "; ";
-  };
-  switch (c.kind) {
-    case ContainerKind::Open:
-    case ContainerKind::Periodic:
-      break;
-    case ContainerKind::Box:
-      check(x, 0.5 * c.size_x, "x");
-      if (dimension == 3) check(y, 0.5 * c.size_y, "y");
-      break;
-    case ContainerKind::HeleShaw:
-      check(x, 0.5 * c.size_x, "x");
-      check(y, 0.5 * c.gap, "y");
-      break;
-    case ContainerKind::Cylinder:
-      if (std::hypot(x, y) > c.radius - r + slack)
-        why << "(x, y) = (" << x << ", " << y << ") puts a grain of radius " << r
-            << " through the cylinder of radius " << c.radius;
-      break;
-    case ContainerKind::Drum:
-      if (std::abs(x) > c.radius - r + slack)
-        why << "x = " << x << " puts a grain of radius " << r << " through the drum of radius " << c.radius << "; ";
-      if (dimension == 3 && !c.periodic_ends) check(y, 0.5 * c.size_y, "y");
-      break;
+  const bool out_round = f.round && std::hypot(x, y) > f.wall_x - r + slack;
+  const bool out_x = f.bound_x && std::abs(x) > f.wall_x - r + slack;
+  const bool out_y = f.bound_y && std::abs(y) > f.wall_y - r + slack;
+  if (!out_round && !out_x && !out_y) return {};  // the hot path: no stream unless the drop does not fit
+  std::ostringstream why;
+  if (out_round)
+    why << "(x, y) = (" << x << ", " << y << ") puts a grain of radius " << r << " through the cylinder of radius "
+        << c.radius;
+  if (out_x) {
+    why << "x = " << x << " puts a grain of radius " << r;
+    if (c.kind == ContainerKind::Drum) why << " through the drum of radius " << c.radius << "; ";
+    else why << " through the wall at +-" << f.wall_x << "; ";
   }
+  if (out_y) why << "y = " << y << " puts a grain of radius " << r << " through the wall at +-" << f.wall_y << "; ";
   return why.str();
+}
+
+void onto_footprint(const Container& c, int dimension, double& x, double& y, double r) {
+  const Footprint f = footprint(c, dimension);
+  if (f.round) {
+    const double R = f.wall_x - r, h = std::hypot(x, y);
+    if (h > R) x *= R / h, y *= R / h;
+  }
+  if (f.bound_x) x = std::clamp(x, -(f.wall_x - r), f.wall_x - r);
+  if (f.bound_y) y = std::clamp(y, -(f.wall_y - r), f.wall_y - r);
 }
 
 }  // namespace btr

@@ -7,6 +7,7 @@
 
 #include <cerrno>
 #include <cstdio>
+#include <algorithm>
 #include <cstring>
 #include <memory>
 #include <stdexcept>
@@ -65,6 +66,16 @@ void write_text_file(const std::string& path, const std::string& content) {
   file.commit();
 }
 
+void FileDigest::add(const void* data, std::size_t n) {
+  const auto* p = static_cast<const Bytef*>(data);
+  for (std::size_t done = 0; done < n;) {  // zlib takes at most uInt bytes at a time
+    const uInt chunk = static_cast<uInt>(std::min<std::size_t>(n - done, 1u << 30));
+    crc32 = static_cast<std::uint32_t>(::crc32(crc32, p + done, chunk));
+    done += chunk;
+  }
+  bytes += n;
+}
+
 FileDigest digest_file(const fs::path& path) {
   struct Closer {
     void operator()(std::FILE* f) const { std::fclose(f); }
@@ -72,15 +83,10 @@ FileDigest digest_file(const fs::path& path) {
   std::unique_ptr<std::FILE, Closer> f(std::fopen(path.c_str(), "rb"));
   if (!f) throw std::runtime_error(path.string() + ": cannot open: " + std::strerror(errno));
   FileDigest d;
-  uLong crc = ::crc32(0L, Z_NULL, 0);
   std::vector<unsigned char> buffer(1 << 20);
   std::size_t n;
-  while ((n = std::fread(buffer.data(), 1, buffer.size(), f.get())) > 0) {
-    crc = ::crc32(crc, buffer.data(), static_cast<uInt>(n));
-    d.bytes += n;
-  }
+  while ((n = std::fread(buffer.data(), 1, buffer.size(), f.get())) > 0) d.add(buffer.data(), n);
   if (std::ferror(f.get())) throw std::runtime_error(path.string() + ": read error: " + std::strerror(errno));
-  d.crc32 = static_cast<std::uint32_t>(crc);
   return d;
 }
 

@@ -2,6 +2,7 @@
 // Files written whole or not at all: each is written under a unique temporary name in its final folder
 // and renamed over the final name only when complete, so a failure or a crash never leaves a half-written
 // file, and two runs writing into the same folder never share a temporary file.
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -33,8 +34,10 @@ void write_text_file(const std::string& path, const std::string& content);
 // Size and CRC-32 (zlib's) of a file's bytes, the record that ties a packing's files to its JSON.
 struct FileDigest {
   std::uint64_t bytes = 0;
-  std::uint32_t crc32 = 0;
+  std::uint32_t crc32 = 0;  // of no bytes: 0
   bool operator==(const FileDigest& o) const { return bytes == o.bytes && crc32 == o.crc32; }
+  // The digest of the bytes so far followed by data[0, n): a writer digests what it writes as it goes.
+  void add(const void* data, std::size_t n);
 };
 // Throws std::runtime_error naming the file if it cannot be read.
 FileDigest digest_file(const std::filesystem::path& path);

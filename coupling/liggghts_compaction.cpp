@@ -3,7 +3,7 @@
 #include <sstream>
 
 #include "coupling/liggghts_script.h"
-#include "coupling/number_text.h"
+#include "btr/number_text.h"
 
 namespace btr {
 

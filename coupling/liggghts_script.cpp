@@ -15,7 +15,7 @@
 #include "coupling/dem_walls.h"
 #include "coupling/liggghts_compaction.h"
 #include "coupling/materials.h"
-#include "coupling/number_text.h"
+#include "btr/number_text.h"
 #include "coupling/relax_plan.h"
 #include "coupling/relax_target.h"
 #include "coupling/atomic_file.h"

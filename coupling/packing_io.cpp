@@ -147,13 +147,21 @@ struct FileCloser {
   void operator()(std::FILE* f) const { std::fclose(f); }
 };
 
-void write_csv(const TempFile& file, const Grains& grains) {
+// Returns the digest of the bytes written (computed as they are written, not read back).
+FileDigest write_csv(const TempFile& file, const Grains& grains) {
   const std::string name = file.final_path().string();
   std::unique_ptr<std::FILE, FileCloser> f(std::fopen(file.temp().c_str(), "wb"));
   if (!f) throw std::runtime_error(name + ": cannot create " + file.temp().string() + ": " + std::strerror(errno));
   const bool clusters = std::any_of(grains.begin(), grains.end(), [](const Grain& g) { return g.cluster != 0; });
   std::string buffer = std::string(clusters ? kClusterHeader : kHeader) + "\n";
   char row[256];
+  FileDigest digest;
+  auto flush = [&] {
+    if (std::fwrite(buffer.data(), 1, buffer.size(), f.get()) != buffer.size())
+      throw std::runtime_error(name + ": write error: " + std::strerror(errno));
+    digest.add(buffer.data(), buffer.size());
+    buffer.clear();
+  };
   for (std::size_t i = 0; i < grains.size(); ++i) {
     const Grain& g = grains[i];
     int n = clusters ? std::snprintf(row, sizeof row, "%zu,%.17g,%.17g,%.17g,%.17g,%d,%d\n", i + 1, g.x.x(),
@@ -161,15 +169,11 @@ void write_csv(const TempFile& file, const Grains& grains) {
                      : std::snprintf(row, sizeof row, "%zu,%.17g,%.17g,%.17g,%.17g,%d\n", i + 1, g.x.x(), g.x.y(),
                                      g.x.z(), g.r, g.species);
     buffer.append(row, static_cast<std::size_t>(n));
-    if (buffer.size() > (1u << 20)) {
-      if (std::fwrite(buffer.data(), 1, buffer.size(), f.get()) != buffer.size())
-        throw std::runtime_error(name + ": write error: " + std::strerror(errno));
-      buffer.clear();
-    }
+    if (buffer.size() > (1u << 20)) flush();
   }
-  if (std::fwrite(buffer.data(), 1, buffer.size(), f.get()) != buffer.size())
-    throw std::runtime_error(name + ": write error: " + std::strerror(errno));
+  flush();
   if (std::fclose(f.release()) != 0) throw std::runtime_error(name + ": write error: " + std::strerror(errno));
+  return digest;
 }
 
 void write_json(const TempFile& file, const nlohmann::json& meta) {
@@ -314,10 +318,10 @@ void write_packing(const std::string& dir, const std::string& name, const Packin
   TempFile csv(fs::path(base.string() + ".csv"));
   TempFile vtp(fs::path(base.string() + ".vtp"));
   TempFile json(fs::path(base.string() + ".json"));
-  write_csv(csv, packing.grains);
-  write_vtp(vtp, packing.grains, extra);
+  const FileDigest csv_digest = write_csv(csv, packing.grains);
+  write_vtp(vtp, packing.grains, extra);  // VTK writes the file itself: its digest is read back
   nlohmann::json meta = packing.meta.is_object() ? packing.meta : nlohmann::json::object();
-  meta["files"] = {{"csv", file_record(digest_file(csv.temp()))}, {"vtp", file_record(digest_file(vtp.temp()))}};
+  meta["files"] = {{"csv", file_record(csv_digest)}, {"vtp", file_record(digest_file(vtp.temp()))}};
   write_json(json, meta);
   fs::remove(json.final_path(), ec);
   if (ec) throw std::runtime_error(json.final_path().string() + ": cannot replace it: " + ec.message());

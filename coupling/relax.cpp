@@ -14,7 +14,7 @@
 #include "coupling/engine_adapter.h"
 #include "coupling/force_io.h"
 #include "coupling/materials.h"
-#include "coupling/number_text.h"
+#include "btr/number_text.h"
 #include "coupling/overlap.h"
 #include "coupling/preload.h"
 #include "coupling/process.h"

@@ -6,7 +6,7 @@
 #include <limits>
 #include <string>
 
-#include "coupling/number_text.h"
+#include "btr/number_text.h"
 #include "coupling/relax_plan.h"
 
 namespace btr {

@@ -8,7 +8,7 @@
 #include <stdexcept>
 
 #include "coupling/materials.h"
-#include "coupling/number_text.h"
+#include "btr/number_text.h"
 
 namespace btr {
 

@@ -26,7 +26,7 @@
 #include "coupling/dem_walls.h"
 #include "coupling/liggghts_script.h"
 #include "coupling/materials.h"
-#include "coupling/number_text.h"
+#include "btr/number_text.h"
 #include "coupling/relax_plan.h"
 #include "coupling/timestep.h"
 

@@ -125,8 +125,9 @@ TEST(HotLoopCorners, ImageKeysAreDistinctAcrossManyPeriods) {
 }
 
 TEST(HotLoopCorners, PeriodTooSmallForImageCodesIsAnError) {
-  Deposition dep(3, test::periodic(1e-4, 1.0), 1.0);
-  EXPECT_THROW(drop(dep, 0.0, 0.0, 1.0), PlacementError);
+  // A property of the container, refused once when the engine is built (not re-checked per grain).
+  EXPECT_THROW(Deposition(3, test::periodic(1e-4, 1.0), 1.0), std::invalid_argument);
+  EXPECT_NO_THROW(Deposition(3, test::periodic(1.0 / 256.0, 1.0), 1.0));
 }
 
 // ---------------------------------------------------------------------------------------------

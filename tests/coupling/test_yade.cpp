@@ -15,7 +15,7 @@
 
 #include "btr/run_scene.h"
 #include "btr/scene_toml.h"
-#include "coupling/number_text.h"
+#include "btr/number_text.h"
 #include "coupling/overlap.h"
 #include "coupling/relax.h"
 #include "coupling/relax_plan.h"

@@ -170,10 +170,13 @@ def packing_csv_text(p: Packing) -> str:
     return "\n".join(lines) + "\n"
 
 
-def file_record(path: str | os.PathLike) -> dict:
-    """A file's size and CRC-32 (zlib's), as NAME.json's "files" records them (the same record as btr's)."""
-    data = Path(path).read_bytes()
+def bytes_record(data: bytes) -> dict:
+    """The size and CRC-32 (zlib's) of a file's bytes, as NAME.json's "files" records them (as btr does)."""
     return {"bytes": len(data), "crc32": zlib.crc32(data)}
+
+
+def file_record(path: str | os.PathLike) -> dict:
+    return bytes_record(Path(path).read_bytes())
 
 
 def _check_against_record(csv_path: str, json_path: str, meta: dict) -> None:
@@ -200,8 +203,9 @@ def write_packing(directory: str | os.PathLike, name: str, p: Packing, point_dat
     d.mkdir(parents=True, exist_ok=True)
     out = {"csv": str(d / f"{name}.csv"), "json": str(d / f"{name}.json")}
     Path(out["json"]).unlink(missing_ok=True)
-    atomic_write_text(out["csv"], packing_csv_text(p))
-    files = {"csv": file_record(out["csv"])}
+    text = packing_csv_text(p)
+    atomic_write_text(out["csv"], text)
+    files = {"csv": bytes_record(text.encode())}
     if vtp:
         out["vtp"] = str(d / f"{name}.vtp")
         write_vtp(out["vtp"], p, point_data or {})
