@@ -17,10 +17,10 @@
 #include <string>
 #include <vector>
 
-#include "btr/deposition.h"
-#include "btr/drum.h"
-#include "btr/run_scene.h"
-#include "btr/size_budget.h"
+#include "btr/dynamics/drum.h"
+#include "btr/placement/deposition.h"
+#include "btr/placement/run_scene.h"
+#include "btr/scene/size_budget.h"
 #include "commands.h"
 
 namespace btr_app {

@@ -4,7 +4,8 @@
 #include <memory>
 
 #include "commands.h"
-#include "coupling/relax.h"
+#include "coupling/dem/relax.h"
+#include "coupling/engines.h"
 #include "load_packing.h"
 #include "validators.h"
 

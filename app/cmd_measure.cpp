@@ -6,10 +6,10 @@
 #include <iostream>
 #include <memory>
 
-#include "btr/metrics.h"
-#include "btr/scene_toml.h"
-#include "coupling/atomic_file.h"
+#include "btr/measures/metrics.h"
+#include "btr/scene/scene_toml.h"
 #include "commands.h"
+#include "coupling/io/atomic_file.h"
 #include "load_packing.h"
 #include "measures_json.h"
 #include "validators.h"

@@ -9,14 +9,14 @@
 #include <iostream>
 #include <memory>
 
-#include "btr/cluster_check.h"
-#include "btr/deposition.h"
-#include "btr/redeposition.h"
-#include "btr/scene_toml.h"
+#include "btr/dynamics/redeposition.h"
+#include "btr/placement/deposition.h"
+#include "btr/scene/scene_toml.h"
+#include "btr/verify/cluster_check.h"
 #include "command_support.h"
 #include "commands.h"
-#include "coupling/scene_json.h"
-#include "coupling/atomic_file.h"
+#include "coupling/io/atomic_file.h"
+#include "coupling/io/scene_json.h"
 #include "series_files.h"
 #include "validators.h"
 

@@ -5,8 +5,9 @@
 #include <memory>
 
 #include "commands.h"
-#include "coupling/process.h"
-#include "coupling/relax.h"
+#include "coupling/dem/process.h"
+#include "coupling/dem/relax.h"
+#include "coupling/engines.h"
 #include "load_packing.h"
 #include "measures_json.h"
 #include "validators.h"

@@ -9,15 +9,15 @@
 #include <iostream>
 #include <memory>
 
-#include "btr/deposition.h"
-#include "btr/metrics.h"
-#include "btr/run_scene.h"
-#include "btr/scene_toml.h"
-#include "btr/shaking.h"
+#include "btr/dynamics/shaking.h"
+#include "btr/measures/metrics.h"
+#include "btr/placement/deposition.h"
+#include "btr/placement/run_scene.h"
+#include "btr/scene/scene_toml.h"
 #include "command_support.h"
 #include "commands.h"
-#include "coupling/scene_json.h"
-#include "coupling/atomic_file.h"
+#include "coupling/io/atomic_file.h"
+#include "coupling/io/scene_json.h"
 #include "progress.h"
 #include "series_files.h"
 #include "validators.h"

@@ -7,9 +7,9 @@
 #include <stdexcept>
 #include <string>
 
-#include "btr/check.h"
-#include "btr/deposition.h"
-#include "btr/scene_toml.h"
+#include "btr/placement/deposition.h"
+#include "btr/scene/scene_toml.h"
+#include "btr/verify/check.h"
 #include "commands.h"
 
 namespace btr_app {
@@ -32,7 +32,7 @@ int run_reporting_errors(const char* command, Body&& body) {
     std::cerr << "btr " << command << ": placement failed: " << e.what() << "\n";
     return kInternalFailure;
   } catch (const std::bad_alloc&) {
-    // The size checks (btr/size_budget.h) refuse what cannot fit before anything is allocated; this is a
+    // The size checks (btr/scene/size_budget.h) refuse what cannot fit before anything is allocated; this is a
     // run that fit the estimate but not the memory free now (other jobs share the machine).
     std::cerr << "btr " << command << ": out of memory: the run needed more than this machine had free; "
               << "run it with fewer grains or when other jobs have ended\n";

@@ -3,7 +3,7 @@
 #include <filesystem>
 #include <stdexcept>
 
-#include "coupling/scene_json.h"
+#include "coupling/io/scene_json.h"
 
 namespace btr_app {
 

@@ -2,8 +2,8 @@
 // The packing a relax/export command works on: PACKING.csv, and the scene stored in PACKING.json.
 #include <string>
 
-#include "btr/scene.h"
-#include "coupling/packing_io.h"
+#include "btr/scene/scene.h"
+#include "coupling/io/packing_io.h"
 
 namespace btr_app {
 

@@ -4,8 +4,8 @@
 // tolerance, window margin, fitted height band).
 #include <nlohmann/json.hpp>
 
-#include "btr/metrics.h"
-#include "btr/scene.h"
+#include "btr/measures/metrics.h"
+#include "btr/scene/scene.h"
 
 namespace btr_app {
 

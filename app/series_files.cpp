@@ -4,10 +4,10 @@
 #include <iostream>
 #include <sstream>
 
-#include "btr/check.h"
+#include "btr/verify/check.h"
 #include "command_support.h"
-#include "coupling/packing_io.h"
-#include "coupling/atomic_file.h"
+#include "coupling/io/atomic_file.h"
+#include "coupling/io/packing_io.h"
 
 namespace btr_app {
 

@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "btr/grain.h"
-#include "btr/scene.h"
+#include "btr/model/grain.h"
+#include "btr/scene/scene.h"
 
 namespace btr_app {
 

@@ -23,9 +23,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from btrdem.io import InputError  # noqa: E402
-from btrdem.runner import REPO, Interrupted, StepFailed, stop_on_signals  # noqa: E402
-from btrdem.error_runtime import METHODS as METHODS_DEFAULT  # noqa: E402
+from btrdem.core.io import InputError  # noqa: E402
+from btrdem.core.runner import REPO, Interrupted, StepFailed, stop_on_signals  # noqa: E402
+from btrdem.studies.error_runtime import METHODS as METHODS_DEFAULT  # noqa: E402
 
 DEFAULT_SCENE = REPO / "inputs" / "bed3d.toml"
 
@@ -174,8 +174,8 @@ def main(argv=None) -> int:
         args.out = os.path.abspath(args.out)
     try:
         if args.command == "compare":
-            from btrdem.compare import compare
-            from btrdem.runner import RunRecord
+            from btrdem.analysis.compare import compare
+            from btrdem.core.runner import RunRecord
             rec = RunRecord(args.out, "compare", inputs=[args.scene] if args.scene else [], progress=progress,
                             settings={"pre": str(Path(args.pre).resolve()), "post": str(Path(args.post).resolve()),
                                       "margin": args.margin, "contact_tolerance": args.contact_tolerance})
@@ -188,9 +188,9 @@ def main(argv=None) -> int:
                      f"{100 * st['fraction_above_0.5']:.3g} %; change in packing fraction "
                      f"{res['changes']['packing_fraction']}, coordination {res['changes']['coordination_mean']}")
         elif args.command == "pour":
-            from btrdem.io import read_packing
-            from btrdem.pour import PourSettings, pour
-            from btrdem.runner import RunRecord
+            from btrdem.core.io import read_packing
+            from btrdem.dem.pour import PourSettings, pour
+            from btrdem.core.runner import RunRecord
             settings = PourSettings(seed=args.seed, np=args.np, pace=args.pace, stop_ratio=args.stop_ratio)
             rec = RunRecord(args.out, "pour", inputs=[args.packing, str(Path(args.packing).with_suffix(".json"))],
                             progress=progress, settings=settings.__dict__)
@@ -199,10 +199,10 @@ def main(argv=None) -> int:
                 st.update(outputs=[summary["packing"]])
             rec.finish(summary)
         elif args.command == "pipeline":
-            from btrdem.pipeline import run_pipeline
+            from btrdem.studies.pipeline import run_pipeline
             run_pipeline(args.scene, args.out, args.engine, args.np, args.seed, args.count, progress)
         elif args.command == "error-vs-runtime":
-            from btrdem.error_runtime import run_error_vs_runtime, run_size_study
+            from btrdem.studies.error_runtime import run_error_vs_runtime, run_size_study
             if args.target_phi != "pour":
                 try:
                     if not 0.0 < float(args.target_phi) < 1.0:
@@ -221,12 +221,12 @@ def main(argv=None) -> int:
             else:
                 run_error_vs_runtime(args.scene, args.out, count=args.count, **kw)
         elif args.command == "stability":
-            from btrdem.stability import run_stability
+            from btrdem.studies.stability import run_stability
             engines = [x for x in args.engines.split(",") if x]
             bad = [x for x in engines if x not in ("liggghts", "yade")]
             if bad:
                 raise InputError(f"--engines: expected liggghts and/or yade, got {', '.join(bad)}")
-            from btrdem.stability import build_cases
+            from btrdem.studies.stability import build_cases
             cases = build_cases(args.tiny, args.full)
             if args.cases:
                 names = [x for x in args.cases.split(",") if x]
@@ -237,30 +237,30 @@ def main(argv=None) -> int:
                 cases = [c for c in cases if c["name"] in names]
             run_stability(args.out, engines, args.tiny, args.full, args.np, progress, cases)
         elif args.command == "brazil-nut":
-            from btrdem.brazil_nut import run_brazil_nut
+            from btrdem.studies.brazil_nut import run_brazil_nut
             dims = [x for x in args.dims.split(",") if x]
             if not dims or any(x not in ("2", "3") for x in dims):
                 raise InputError(f"--dims: expected 3 and/or 2, comma-separated, got {args.dims!r}")
             run_brazil_nut(args.out, tuple(int(x) for x in dims), args.tiny, args.seed, progress)
         elif args.command == "hele-shaw":
-            from btrdem.hele_shaw import run_hele_shaw
+            from btrdem.studies.hele_shaw import run_hele_shaw
             if not args.pace > 0:
                 raise InputError(f"--pace: expected a positive number, got {args.pace}")
             if args.n is not None and args.n < 1:
                 raise InputError(f"--n: expected a positive number of grains, got {args.n}")
             run_hele_shaw(args.out, args.reduced, args.tiny, args.pace, args.seed, progress, args.n)
         elif args.command == "drum":
-            from btrdem.drum import run_drum
+            from btrdem.studies.drum import run_drum
             if not args.revolutions > 0:
                 raise InputError(f"--revolutions: expected a positive number, got {args.revolutions}")
             run_drum(args.out, args.revolutions, args.tiny, progress)
         elif args.command == "nano-powder":
-            from btrdem.nano_powder import run_nano_powder
+            from btrdem.studies.nano_powder import run_nano_powder
             if args.cycles < 3:
                 raise InputError(f"--cycles: expected at least 3 cycles to fit, got {args.cycles}")
             run_nano_powder(args.out, args.cycles, args.tiny, progress)
         elif args.command == "stratification":
-            from btrdem.stratification import run_stratification
+            from btrdem.studies.stratification import run_stratification
             seeds = None
             if args.seeds:
                 try:

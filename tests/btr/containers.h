@@ -1,6 +1,6 @@
 #pragma once
 // Containers the BTR tests build by hand (lengths in metres or in radii, as each test says).
-#include "btr/container.h"
+#include "btr/model/container.h"
 
 namespace btr::test {
 

@@ -3,8 +3,8 @@
 
 #include <cmath>
 
+#include "btr/verify/check.h"
 #include "containers.h"
-#include "btr/check.h"
 
 namespace btr {
 namespace {

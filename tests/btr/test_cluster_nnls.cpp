@@ -1,7 +1,7 @@
 // Least-distance programming (the rigid-cluster rest projection): hand cases with known answers.
 #include <gtest/gtest.h>
 
-#include "btr/nnls.h"
+#include "btr/placement/nnls.h"
 
 namespace btr {
 namespace {

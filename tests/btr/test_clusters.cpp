@@ -8,13 +8,13 @@
 #include <random>
 #include <sstream>
 
+#include "btr/model/cluster.h"
+#include "btr/placement/cluster_placement.h"
+#include "btr/placement/deposition.h"
+#include "btr/placement/neighbour_grid.h"
+#include "btr/verify/cluster_check.h"
+#include "btr/verify/cluster_unwrap.h"
 #include "containers.h"
-#include "btr/cluster.h"
-#include "btr/cluster_check.h"
-#include "btr/cluster_placement.h"
-#include "btr/cluster_unwrap.h"
-#include "btr/deposition.h"
-#include "btr/neighbour_grid.h"
 
 namespace btr {
 namespace {

@@ -8,7 +8,7 @@
 #include <numeric>
 #include <random>
 
-#include "btr/drops.h"
+#include "btr/placement/drops.h"
 
 namespace btr {
 namespace {

@@ -4,10 +4,10 @@
 
 #include <cmath>
 
-#include "btr/check.h"
-#include "btr/deposition.h"
-#include "btr/drum.h"
-#include "btr/metrics.h"
+#include "btr/dynamics/drum.h"
+#include "btr/measures/metrics.h"
+#include "btr/placement/deposition.h"
+#include "btr/verify/check.h"
 
 namespace btr {
 namespace {

@@ -1,4 +1,4 @@
-// The static force network (btr/force_network.h): hand cases with closed-form forces, global and
+// The static force network (btr/measures/force_network.h): hand cases with closed-form forces, global and
 // per-grain balance on real BTR packings (recomputed from the contact list alone), and broken
 // packings (a floating grain, a removed support) that must be reported.
 #include <gtest/gtest.h>
@@ -9,9 +9,9 @@
 #include <map>
 #include <random>
 
+#include "btr/measures/force_network.h"
+#include "btr/placement/deposition.h"
 #include "containers.h"
-#include "btr/deposition.h"
-#include "btr/force_network.h"
 
 namespace btr {
 namespace {

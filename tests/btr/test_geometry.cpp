@@ -9,9 +9,9 @@
 
 #include <Eigen/Geometry>
 
+#include "btr/placement/deposition.h"
+#include "btr/verify/check.h"
 #include "containers.h"
-#include "btr/check.h"
-#include "btr/deposition.h"
 
 namespace btr {
 namespace {

@@ -9,13 +9,13 @@
 #include <set>
 #include <tuple>
 
+#include "btr/placement/circle_arc.h"
+#include "btr/placement/deposition.h"
+#include "btr/placement/descent.h"
+#include "btr/placement/neighbour_grid.h"
+#include "btr/placement/obstacle.h"
+#include "btr/verify/check.h"
 #include "containers.h"
-#include "btr/check.h"
-#include "btr/circle_arc.h"
-#include "btr/deposition.h"
-#include "btr/descent.h"
-#include "btr/neighbour_grid.h"
-#include "btr/obstacle.h"
 
 namespace btr {
 namespace {

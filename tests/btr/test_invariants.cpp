@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "btr/check.h"
-#include "btr/deposition.h"
+#include "btr/placement/deposition.h"
+#include "btr/verify/check.h"
 
 namespace btr {
 namespace {

@@ -3,8 +3,8 @@
 
 #include <cmath>
 
+#include "btr/measures/metrics.h"
 #include "containers.h"
-#include "btr/metrics.h"
 
 namespace btr {
 namespace {

@@ -5,10 +5,10 @@
 #include <filesystem>
 #include <fstream>
 
-#include "btr/cluster_check.h"
-#include "btr/drops.h"
-#include "btr/redeposition.h"
-#include "btr/scene_toml.h"
+#include "btr/dynamics/redeposition.h"
+#include "btr/placement/drops.h"
+#include "btr/scene/scene_toml.h"
+#include "btr/verify/cluster_check.h"
 
 namespace btr {
 namespace {

@@ -9,13 +9,13 @@
 #include <fstream>
 #include <unistd.h>
 
-#include "btr/check.h"
-#include "btr/deposition.h"
-#include "btr/drops.h"
-#include "btr/metrics.h"
-#include "btr/run_scene.h"
-#include "btr/scene_toml.h"
-#include "btr/shaking.h"
+#include "btr/dynamics/shaking.h"
+#include "btr/measures/metrics.h"
+#include "btr/placement/deposition.h"
+#include "btr/placement/drops.h"
+#include "btr/placement/run_scene.h"
+#include "btr/scene/scene_toml.h"
+#include "btr/verify/check.h"
 
 namespace btr {
 namespace {

@@ -8,8 +8,8 @@
 #include <functional>
 #include <random>
 
-#include "btr/metrics.h"
-#include "btr/stratification.h"
+#include "btr/measures/metrics.h"
+#include "btr/measures/stratification.h"
 
 namespace btr {
 namespace {

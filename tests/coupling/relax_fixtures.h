@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "btr/scene.h"
-#include "coupling/packing_io.h"
-#include "coupling/scene_json.h"
-#include "coupling/yade_script.h"
+#include "btr/scene/scene.h"
+#include "coupling/io/packing_io.h"
+#include "coupling/io/scene_json.h"
+#include "coupling/yade/yade_script.h"
 
 namespace btr_test {
 

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "coupling/relax.h"
+#include "coupling/dem/relax.h"
 #include "relax_fixtures.h"
 
 namespace btr_test {

@@ -8,10 +8,11 @@
 #include <set>
 #include <string>
 
-#include "btr/redeposition.h"
-#include "coupling/relax.h"
-#include "coupling/relax_plan.h"
-#include "coupling/yade_script.h"
+#include "btr/dynamics/redeposition.h"
+#include "coupling/dem/relax.h"
+#include "coupling/dem/relax_plan.h"
+#include "coupling/engines.h"
+#include "coupling/yade/yade_script.h"
 #include "relax_fixtures.h"
 #include "relaxation_checks.h"
 

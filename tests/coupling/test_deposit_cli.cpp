@@ -11,8 +11,8 @@
 #include <set>
 #include <sstream>
 
-#include "coupling/packing_io.h"
-#include "coupling/scene_json.h"
+#include "coupling/io/packing_io.h"
+#include "coupling/io/scene_json.h"
 
 namespace btr {
 namespace {

@@ -4,9 +4,10 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "btr/deposition.h"
-#include "btr/metrics.h"
-#include "coupling/relax.h"
+#include "btr/measures/metrics.h"
+#include "btr/placement/deposition.h"
+#include "coupling/dem/relax.h"
+#include "coupling/engines.h"
 #include "relax_fixtures.h"
 
 namespace {

@@ -10,13 +10,14 @@
 #include <set>
 #include <sstream>
 
-#include "btr/run_scene.h"
-#include "btr/scene_toml.h"
-#include "coupling/liggghts_script.h"
-#include "coupling/timestep.h"
-#include "coupling/overlap.h"
-#include "coupling/relax.h"
-#include "coupling/relax_plan.h"
+#include "btr/placement/run_scene.h"
+#include "btr/scene/scene_toml.h"
+#include "coupling/dem/overlap.h"
+#include "coupling/dem/relax.h"
+#include "coupling/dem/relax_plan.h"
+#include "coupling/dem/timestep.h"
+#include "coupling/engines.h"
+#include "coupling/liggghts/liggghts_script.h"
 #include "relax_fixtures.h"
 #include "relaxation_checks.h"
 

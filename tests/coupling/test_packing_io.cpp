@@ -18,8 +18,8 @@
 #include <vtkPolyData.h>
 #include <vtkXMLPolyDataReader.h>
 
-#include "coupling/atomic_file.h"
-#include "coupling/packing_io.h"
+#include "coupling/io/atomic_file.h"
+#include "coupling/io/packing_io.h"
 
 namespace btr {
 namespace {

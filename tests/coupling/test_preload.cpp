@@ -1,4 +1,4 @@
-// Pre-loaded start (coupling/preload.h): overlaps from the contact law against closed forms, columns
+// Pre-loaded start (coupling/dem/preload.h): overlaps from the contact law against closed forms, columns
 // of spheres lowered by hand-computed amounts, the overlap check allowing the intended overlaps and
 // still catching a real one, real BTR packings, and both engines starting a pre-loaded column at rest.
 #include <gtest/gtest.h>
@@ -10,13 +10,14 @@
 #include <vector>
 #include <filesystem>
 
-#include "btr/run_scene.h"
-#include "btr/scene_toml.h"
-#include "coupling/overlap.h"
-#include "coupling/preload.h"
-#include "coupling/relax.h"
-#include "coupling/relax_plan.h"
-#include "coupling/yade_script.h"
+#include "btr/placement/run_scene.h"
+#include "btr/scene/scene_toml.h"
+#include "coupling/dem/overlap.h"
+#include "coupling/dem/preload.h"
+#include "coupling/dem/relax.h"
+#include "coupling/dem/relax_plan.h"
+#include "coupling/engines.h"
+#include "coupling/yade/yade_script.h"
 #include "relax_fixtures.h"
 
 namespace {

@@ -8,10 +8,11 @@
 #include <fstream>
 #include <sstream>
 
-#include "coupling/overlap.h"
-#include "coupling/process.h"
-#include "coupling/relax.h"
-#include "coupling/relax_plan.h"
+#include "coupling/dem/overlap.h"
+#include "coupling/dem/process.h"
+#include "coupling/dem/relax.h"
+#include "coupling/dem/relax_plan.h"
+#include "coupling/engines.h"
 #include "relax_fixtures.h"
 
 namespace fs = std::filesystem;

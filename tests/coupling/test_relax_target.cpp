@@ -8,11 +8,12 @@
 #include <sstream>
 #include <string>
 
-#include "btr/run_scene.h"
-#include "coupling/liggghts_script.h"
-#include "coupling/relax_plan.h"
-#include "coupling/relax_target.h"
-#include "coupling/yade_script.h"
+#include "btr/placement/run_scene.h"
+#include "coupling/dem/relax_plan.h"
+#include "coupling/dem/relax_target.h"
+#include "coupling/engines.h"
+#include "coupling/liggghts/liggghts_script.h"
+#include "coupling/yade/yade_script.h"
 #include "relax_fixtures.h"
 #include "relaxation_checks.h"
 

@@ -3,9 +3,9 @@
 
 #include <filesystem>
 
-#include "btr/scene_toml.h"
-#include "coupling/dem_walls.h"
-#include "coupling/scene_json.h"
+#include "btr/scene/scene_toml.h"
+#include "coupling/dem/dem_walls.h"
+#include "coupling/io/scene_json.h"
 
 namespace btr {
 namespace {

@@ -7,11 +7,13 @@
 #include <fstream>
 #include <sstream>
 
-#include "coupling/liggghts_script.h"
-#include "coupling/relax.h"
-#include "coupling/relax_plan.h"
-#include "coupling/timestep.h"
-#include "coupling/yade_script.h"
+#include "coupling/dem/check_schedule.h"
+#include "coupling/dem/relax.h"
+#include "coupling/dem/relax_plan.h"
+#include "coupling/dem/timestep.h"
+#include "coupling/engines.h"
+#include "coupling/liggghts/liggghts_script.h"
+#include "coupling/yade/yade_script.h"
 #include "relax_fixtures.h"
 #include "relaxation_checks.h"
 
@@ -106,7 +108,7 @@ TEST_P(StopRules, DisplacementFiresOnlyWhenGrainsStop) {
   EXPECT_LT(r.stop_value, threshold);
   // At rest: no grain is moving faster than the threshold per check window allows (within 10x).
   const btr::RelaxPlan plan = btr::make_plan(bed, scene, {}, GetParam());
-  const btr::LiggghtsSchedule sched = btr::liggghts_schedule(bed.grains, scene, plan);
+  const btr::CheckSchedule sched = btr::check_schedule(bed.grains, scene, plan);
   double speed = 0;
   for (const btr::Vec3& v : r.velocities) speed = std::max(speed, v.norm());
   EXPECT_LT(speed * sched.steps_per_check * plan.timestep, 10 * threshold);

@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "coupling/timestep.h"
+#include "coupling/dem/timestep.h"
 #include "relax_fixtures.h"
 
 namespace {

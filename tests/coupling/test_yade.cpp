@@ -13,13 +13,14 @@
 #include <set>
 #include <sstream>
 
-#include "btr/run_scene.h"
-#include "btr/scene_toml.h"
-#include "btr/number_text.h"
-#include "coupling/overlap.h"
-#include "coupling/relax.h"
-#include "coupling/relax_plan.h"
-#include "coupling/yade_script.h"
+#include "btr/model/number_text.h"
+#include "btr/placement/run_scene.h"
+#include "btr/scene/scene_toml.h"
+#include "coupling/dem/overlap.h"
+#include "coupling/dem/relax.h"
+#include "coupling/dem/relax_plan.h"
+#include "coupling/engines.h"
+#include "coupling/yade/yade_script.h"
 #include "relax_fixtures.h"
 #include "relaxation_checks.h"
 

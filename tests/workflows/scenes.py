@@ -4,7 +4,7 @@ from pathlib import Path
 
 import numpy as np
 
-from btrdem.io import Packing, write_packing
+from btrdem.core.io import Packing, write_packing
 
 
 def tiny_bed_toml(path: Path, count=150, size=0.007, max_time=0.05, young=5e6, engine="liggghts") -> str:

@@ -5,7 +5,7 @@ import math
 import subprocess
 import sys
 
-from btrdem import brazil_nut
+from btrdem.studies import brazil_nut
 
 
 def test_brazil_nut_tiny(tmp_path, source_dir, btr_binary):

@@ -7,8 +7,8 @@ import sys
 import numpy as np
 import pytest
 
-from btrdem.io import read_packing, read_vtp_arrays
-from btrdem.report import fmt as report_fmt
+from btrdem.core.io import read_packing, read_vtp_arrays
+from btrdem.core.report import fmt as report_fmt
 from scenes import tiny_bed_toml
 
 
@@ -73,7 +73,7 @@ def test_failed_step_keeps_earlier_outputs(tmp_path, source_dir, btr_binary):
 
 def test_relative_output_folders_are_not_nested(tmp_path, source_dir, btr_binary, monkeypatch):
     """btr runs in its output folder: a relative -o must still name the folder the caller meant."""
-    from btrdem import btr_cli
+    from btrdem.core import btr_cli
     monkeypatch.chdir(tmp_path)
     dep = btr_cli.deposit(btr_binary, str(source_dir / "inputs" / "bed3d.toml"), "rel/btr", count=50,
                           progress=lambda *_: None)

@@ -7,8 +7,8 @@ import sys
 import numpy as np
 import pytest
 
-from btrdem.compare import compare
-from btrdem.io import InputError, Packing, read_packing, read_vtp_arrays, write_packing
+from btrdem.analysis.compare import compare
+from btrdem.core.io import InputError, Packing, read_packing, read_vtp_arrays, write_packing
 from lattices import fcc
 from scenes import packing_with_scene
 

@@ -7,7 +7,7 @@ import sys
 
 import numpy as np
 
-from btrdem import drum
+from btrdem.studies import drum
 
 
 def test_drum_tiny(tmp_path, source_dir, btr_binary):

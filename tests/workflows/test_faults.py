@@ -13,8 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from btrdem.io import InputError, read_packing, write_packing
-from btrdem.runner import Interrupted, RunRecord
+from btrdem.core.io import InputError, read_packing, write_packing
+from btrdem.core.runner import Interrupted, RunRecord
 
 
 # ---- helpers --------------------------------------------------------------------------------------

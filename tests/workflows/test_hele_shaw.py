@@ -10,8 +10,8 @@ import sys
 
 import numpy as np
 
-from btrdem import hele_shaw
-from btrdem.runner import StepFailed
+from btrdem.studies import hele_shaw
+from btrdem.core.runner import StepFailed
 
 
 def _matrix(script: str, name: str) -> list:
@@ -77,7 +77,7 @@ def test_a_failed_method_is_a_row_with_its_reason(tmp_path, btr_binary, liggghts
     """The unbalanced-force relaxation is stopped by a 0.01 s wall-time limit: its row says fail with the
     engine's reason, the rows before it are ok, the report lists it, and the study finishes. Run with seed 2:
     the seed reaches the DEM pour too (it used to pour with seed 1 whatever --seed said)."""
-    from btrdem import btr_cli
+    from btrdem.core import btr_cli
 
     real_relax = btr_cli.relax
 

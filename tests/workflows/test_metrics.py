@@ -1,14 +1,14 @@
-"""Structural measures, through `btr measure` (their one definition, btr/metrics.cpp), on configurations
+"""Structural measures, through `btr measure` (their one definition, btr/measures/metrics.cpp), on configurations
 whose answers are known independently; displacement on rigid shifts."""
 import math
 
 import numpy as np
 import pytest
 
-from btrdem import measures
-from btrdem.displacement import displacement, displacement_stats
-from btrdem.geometry import Container
-from btrdem.neighbours import touching_pairs
+from btrdem.analysis import measures
+from btrdem.analysis.displacement import displacement, displacement_stats
+from btrdem.core.geometry import Container
+from btrdem.core.neighbours import touching_pairs
 from lattices import fcc, hexagonal_2d, peaks, simple_cubic, square_2d
 from scenes import packing_with_scene
 

@@ -9,8 +9,8 @@ import sys
 import numpy as np
 import pytest
 
-from btrdem.io import Packing, packing_csv_text, read_packing
-from btrdem.nano_powder import fit_saturation, mean_over_seeds, read_cycles, saturating
+from btrdem.core.io import Packing, packing_csv_text, read_packing
+from btrdem.studies.nano_powder import fit_saturation, mean_over_seeds, read_cycles, saturating
 
 
 def test_fit_recovers_known_parameters_with_honest_errors():

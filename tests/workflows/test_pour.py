@@ -2,11 +2,11 @@
 import numpy as np
 import pytest
 
-from btrdem import measures
-from btrdem.neighbours import touching_pairs
-from btrdem.io import read_packing
-from btrdem.pour import PourFailure, PourSettings, initial_lattice, pour
-from btrdem.geometry import Container
+from btrdem.analysis import measures
+from btrdem.core.neighbours import touching_pairs
+from btrdem.core.io import read_packing
+from btrdem.dem.pour import PourFailure, PourSettings, initial_lattice, pour
+from btrdem.core.geometry import Container
 from scenes import grains_packing, scene_json
 
 

@@ -9,9 +9,9 @@ import sys
 import numpy as np
 import pytest
 
-from btrdem import btr_cli
-from btrdem import stability as st
-from btrdem.io import read_packing, write_scene_toml
+from btrdem.core import btr_cli
+from btrdem.studies import stability as st
+from btrdem.core.io import read_packing, write_scene_toml
 
 
 def tiny_case(tmp_path, btr_binary, name, **kw):

@@ -9,7 +9,7 @@ import sys
 
 import numpy as np
 
-from btrdem import stratification
+from btrdem.studies import stratification
 
 
 def _matrix(script: str, name: str) -> list:

@@ -60,7 +60,8 @@ def test_error_vs_runtime_tiny(tmp_path, source_dir, btr_binary, liggghts):
 def test_error_vs_runtime_keeps_going_when_a_method_fails(tmp_path, btr_binary, liggghts, monkeypatch):
     """A forced engine failure in one method (LIGGGHTS stopped by a 0.01 s wall-time limit) is a row with
     its reason; the methods after it still run and the table is complete."""
-    from btrdem import btr_cli, error_runtime
+    from btrdem.core import btr_cli
+    from btrdem.studies import error_runtime
 
     real_relax = btr_cli.relax
 
@@ -99,7 +100,8 @@ def test_size_study_new_methods_failed_count_and_reused_pours(tmp_path, btr_bina
     with its reason and the study goes on; both target-phi methods record their compaction (target = the pours'
     mean, and whether it was reached); pre-loading without --preload in this build is a failed row naming the
     option; a rerun with reuse_pours takes the finished reference pours and their recorded times."""
-    from btrdem import btr_cli, error_runtime
+    from btrdem.core import btr_cli
+    from btrdem.studies import error_runtime
 
     monkeypatch.setenv("BTR_BINARY", btr_binary)
     scene = tiny_bed_toml(tmp_path / "evr.toml", count=150, max_time=0.04)

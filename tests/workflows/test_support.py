@@ -4,8 +4,8 @@ import math
 import numpy as np
 import pytest
 
-from btrdem.geometry import Container
-from btrdem.support import btr_supports, polygon_margin
+from btrdem.core.geometry import Container
+from btrdem.analysis.support import btr_supports, polygon_margin
 
 
 def line_distance(p, a, b):

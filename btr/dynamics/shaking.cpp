@@ -1,0 +1,63 @@
+#include "btr/dynamics/shaking.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "btr/placement/deposition.h"
+
+namespace btr {
+
+Shaker::Shaker(int dimension, const Container& container, double lift, double noise, std::uint64_t seed)
+    : dimension_(dimension), container_(container), lift_(lift), noise_(noise), rng_(seed) {}
+
+std::vector<std::size_t> Shaker::height_order(const Grains& grains) {
+  std::vector<std::size_t> order(grains.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return grains[a].x.z() < grains[b].x.z(); });
+  return order;
+}
+
+void Shaker::keep_inside(double& x, double& y, double r) const {
+  const Container& c = container_;
+  auto clamp = [](double& v, double half) { v = std::clamp(v, -half, half); };
+  switch (c.kind) {
+    case ContainerKind::Box:
+      clamp(x, 0.5 * c.size_x - r);
+      if (dimension_ == 3) clamp(y, 0.5 * c.size_y - r);
+      break;
+    case ContainerKind::HeleShaw:
+      clamp(x, 0.5 * c.size_x - r);
+      clamp(y, 0.5 * c.gap - r);
+      break;
+    case ContainerKind::Cylinder: {
+      const double rho = std::hypot(x, y), max = c.radius - r;
+      if (rho > max) x *= max / rho, y *= max / rho;
+      break;
+    }
+    default: break;
+  }
+}
+
+Grains Shaker::cycle(const Grains& grains) {
+  Grains out(grains.size());
+  if (grains.empty()) return out;
+  double r_max = 0.0;
+  for (const Grain& g : grains) r_max = std::max(r_max, g.r);
+  Deposition engine(dimension_, container_, r_max);
+  for (std::size_t i : height_order(grains)) {
+    const Grain& g = grains[i];
+    Drop d{g.x.x(), dimension_ == 3 ? g.x.y() : 0.0, g.r, g.species, g.x.z() + lift_};
+    if (noise_ > 0.0) {
+      d.x += noise_ * (2.0 * uniform() - 1.0);
+      if (dimension_ == 3) d.y += noise_ * (2.0 * uniform() - 1.0);
+      keep_inside(d.x, d.y, d.r);
+    }
+    const Grain& placed = engine.place(d);
+    out[i] = placed;
+  }
+  return out;
+}
+
+}  // namespace btr

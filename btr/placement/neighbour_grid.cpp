@@ -1,0 +1,194 @@
+#include "btr/placement/neighbour_grid.h"
+
+#include "btr/scene/size_budget.h"
+
+#include <algorithm>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace btr {
+
+NeighbourGrid::NeighbourGrid(int dimension, const Container& c, double r_max)
+    : dimension_(dimension), wrap_x_(wraps_x(c)), wrap_y_(wraps_y(c, dimension)), grows_(c.kind == ContainerKind::Open),
+      h_(2.0 * r_max) {
+  hx_ = hy_ = h_;
+  auto span = [&](double length, double& origin, long& n, double& width, bool periodic) {
+    origin = -0.5 * length;
+    if (periodic) {
+      n = std::max(1L, static_cast<long>(std::floor(length / h_)));
+      width = length / n;
+    } else {
+      n = std::max(1L, static_cast<long>(std::ceil(length / h_)));
+      width = h_;
+    }
+  };
+  switch (c.kind) {
+    case ContainerKind::Open:
+      x0_ = 0.0; y0_ = 0.0; ix0_ = -8; nx_ = 16;
+      iy0_ = dimension == 3 ? -8 : 0; ny_ = dimension == 3 ? 16 : 1;
+      break;
+    case ContainerKind::Box:
+    case ContainerKind::Periodic:
+      span(c.size_x, x0_, nx_, hx_, wrap_x_);
+      if (dimension == 3) span(c.size_y, y0_, ny_, hy_, wrap_y_);
+      else { y0_ = 0.0; ny_ = 1; }
+      period_x_ = c.size_x;
+      period_y_ = dimension == 3 ? c.size_y : 0.0;
+      break;
+    case ContainerKind::HeleShaw:
+      span(c.size_x, x0_, nx_, hx_, wrap_x_);
+      span(c.gap, y0_, ny_, hy_, false);
+      break;
+    case ContainerKind::Cylinder:
+      span(2.0 * c.radius, x0_, nx_, hx_, false);
+      span(2.0 * c.radius, y0_, ny_, hy_, false);
+      break;
+    case ContainerKind::Drum:
+      span(2.0 * c.radius, x0_, nx_, hx_, false);
+      if (dimension == 3) span(c.size_y, y0_, ny_, hy_, wrap_y_);
+      period_y_ = wrap_y_ ? c.size_y : 0.0;
+      break;
+  }
+  if (dimension == 2) { y0_ = -0.5 * h_; iy0_ = 0; ny_ = 1; hy_ = h_; }
+  columns_.resize(static_cast<std::size_t>(nx_ * ny_));
+}
+
+namespace {
+
+// A query over more periods than image codes tell apart (a period far below the grain size).
+[[noreturn]] void too_many_images(const char* axis) {
+    throw std::length_error(std::string("neighbour query spans more than ") +
+                            std::to_string(NeighbourGrid::kMaxImageShift - 2) + " periods in " + axis +
+                            ": the period is too small against the grain size");
+}
+
+inline void check_images(long lo, long hi, long n, const char* axis) {
+  const long limit = (NeighbourGrid::kMaxImageShift - 2) * n;
+  if (lo < -limit || hi > limit) too_many_images(axis);
+}
+
+// Floor of v as a column index; v must be finite (checked by the caller for inserted centres; a
+// query box is built from finite centres).
+long index_of(double v) { return static_cast<long>(std::floor(v)); }
+
+}  // namespace
+
+NeighbourGrid::Range NeighbourGrid::x_range(double lo, double hi) const {
+  const Range r{index_of((lo - x0_) / hx_), index_of((hi - x0_) / hx_)};
+  if (wrap_x_) check_images(r.lo, r.hi, nx_, "x");
+  return r;
+}
+
+NeighbourGrid::Range NeighbourGrid::y_range(double lo, double hi) const {
+  if (dimension_ == 2) return {0, 0};
+  const Range r{index_of((lo - y0_) / hy_), index_of((hi - y0_) / hy_)};
+  if (wrap_y_) check_images(r.lo, r.hi, ny_, "y");
+  return r;
+}
+
+void NeighbourGrid::prefetch(double x, double y, double reach, double z, int stage) const {
+  if (!std::isfinite(x) || !std::isfinite(y)) return;
+  const Range rx = x_range(x - reach, x + reach), ry = y_range(y - reach, y + reach);
+  const long iz = std::isfinite(z) ? std::max(0L, index_of(z / h_)) : std::numeric_limits<long>::max();
+  for (long iy = ry.lo; iy <= ry.hi; ++iy) {
+    long wy = iy;
+    if (wrap_y_) wy = iy - floor_div(iy, ny_) * ny_;
+    else if (iy < iy0_ || iy >= iy0_ + ny_) continue;
+    for (long ix = rx.lo; ix <= rx.hi; ++ix) {
+      long wx = ix;
+      if (wrap_x_) wx = ix - floor_div(ix, nx_) * nx_;
+      else if (ix < ix0_ || ix >= ix0_ + nx_) continue;
+      const Column& column = columns_[column_of(wx, wy)];
+      if (stage == 0) {
+        __builtin_prefetch(&column);
+        continue;
+      }
+      const long layers = column.layers();
+      if (layers == 0) continue;
+      const long top = std::min(layers - 1, iz);
+      if (stage == 1) {
+        __builtin_prefetch(column.start.data() + std::max(0L, top - 1));
+        continue;
+      }
+      const char* begin = reinterpret_cast<const char*>(column.entries.data() + column.start[std::max(0L, top - 1)]);
+      const char* end = reinterpret_cast<const char*>(column.entries.data() + column.start[top + 1]);
+      for (int line = 0; line < 8 && begin + 64 * line < end; ++line) __builtin_prefetch(begin + 64 * line);
+    }
+  }
+}
+
+// An open floor's grid grows towards the column that is outside it, on that side only, at least
+// doubling its extent on that axis (amortised constant cost per grain as a heap spreads). A grid that
+// would exceed its budget (a grain dropped far from all the others) is refused, not allocated.
+void NeighbourGrid::grow_to(long ix, long iy) {
+  auto extend = [](long i, long& i0, long& n) {
+    if (i < i0) {
+      const long hi = i0 + n;
+      i0 = std::min(i, i0 - n);
+      n = hi - i0;
+    } else if (i >= i0 + n) {
+      n = std::max(i - i0 + 1, 2 * n);
+    }
+  };
+  long new_ix0 = ix0_, new_nx = nx_, new_iy0 = iy0_, new_ny = ny_;
+  extend(ix, new_ix0, new_nx);
+  if (dimension_ == 3) extend(iy, new_iy0, new_ny);
+  // The same rule as the scene's up-front check (size_budget.h): a grid the scene's footprint allowed never
+  // hits it; a grid larger than half this machine's memory is refused instead of allocated.
+  const double budget = std::max(double(1L << 20), 0.5 * machine_memory_bytes() / double(sizeof(Column)));
+  if (double(new_nx) * double(new_ny) > budget) {
+    std::ostringstream why;
+    why << "centre " << ix - ix0_ << ", " << iy - iy0_ << " cells from the grid's corner: the open floor's neighbour "
+        << "grid would need " << double(new_nx) * double(new_ny) << " columns (budget " << budget
+        << "): a drop far away from all the other grains";
+    throw std::length_error(why.str());
+  }
+  std::vector<Column> grown(static_cast<std::size_t>(new_nx * new_ny));
+  for (long y = iy0_; y < iy0_ + ny_; ++y)
+    for (long x = ix0_; x < ix0_ + nx_; ++x)
+      grown[(x - new_ix0) + new_nx * (y - new_iy0)] = std::move(columns_[column_of(x, y)]);
+  columns_ = std::move(grown);
+  ix0_ = new_ix0; nx_ = new_nx; iy0_ = new_iy0; ny_ = new_ny;
+}
+
+void NeighbourGrid::insert(std::int32_t index, const Vec3& x, double r) {
+  if (!x.allFinite()) {
+    std::ostringstream why;
+    why << "grain index " << index << " has a non-finite centre (" << x.x() << ", " << x.y() << ", " << x.z() << ")";
+    throw std::out_of_range(why.str());
+  }
+  const double ux = (x.x() - x0_) / hx_, uy = dimension_ == 3 ? (x.y() - y0_) / hy_ : 0.0;
+  long ix = index_of(ux), iy = index_of(uy);
+  if (grows_) {
+    if (ix < ix0_ || ix >= ix0_ + nx_ || iy < iy0_ || iy >= iy0_ + ny_) grow_to(ix, iy);
+  } else {
+    // A centre on the grid's edge is outside by round-off only; farther out, the grain escaped.
+    auto bound = [&](double u, long i, long i0, long n, bool wrap, const char* axis) {
+      if (wrap) return i - floor_div(i, n) * n;
+      constexpr double kEdge = 1e-9;  // in cell widths
+      if (u < double(i0) - kEdge || u > double(i0 + n) + kEdge) {
+        std::ostringstream why;
+        why << "grain index " << index << " at (" << x.x() << ", " << x.y() << ", " << x.z() << ") is outside the "
+            << "container's grid in " << axis;
+        throw std::out_of_range(why.str());
+      }
+      return std::clamp(i, i0, i0 + n - 1);
+    };
+    ix = bound(ux, ix, ix0_, nx_, wrap_x_, "x");
+    iy = bound(uy, iy, iy0_, ny_, wrap_y_, "y");
+  }
+  const long iz = std::max(0L, index_of(x.z() / h_));
+  Column& column = columns_[column_of(ix, iy)];
+  if (column.start.empty()) column.start.push_back(0);
+  if (column.layers() <= iz) {
+    const std::uint32_t end = column.start.back();  // a copy: resize may move the storage
+    column.start.resize(static_cast<std::size_t>(iz) + 2, end);
+  }
+  // At the end of layer iz; the layers above (usually none: grains mostly land on top) move up by one.
+  column.entries.insert(column.entries.begin() + column.start[iz + 1], Entry{x.x(), x.y(), x.z(), r, index});
+  for (std::size_t k = static_cast<std::size_t>(iz) + 1; k < column.start.size(); ++k) ++column.start[k];
+}
+
+}  // namespace btr

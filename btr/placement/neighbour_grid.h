@@ -1,0 +1,203 @@
+#pragma once
+// Uniform grid over x-y columns and height, with cells at least one largest diameter wide, so the
+// grains near a point are found in a constant number of cells whatever the number already placed.
+// Periodic axes (a periodic container, a drum's periodic ends) wrap columns and report each grain with the shift of the image found.
+// An open floor has no footprint: the grid grows as the heap spreads.
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "btr/model/container.h"
+#include "btr/model/grain.h"
+
+namespace btr {
+
+class NeighbourGrid {
+ public:
+  NeighbourGrid(int dimension, const Container& container, double r_max);
+
+  // Throws std::out_of_range for a non-finite centre or one outside a bounded container's grid (an
+  // escaped grain; a centre on the grid's edge up to round-off is kept in the edge column), and
+  // std::length_error when an open floor's grid would grow beyond its column budget.
+  void insert(std::int32_t index, const Vec3& x, double r);
+
+  // Image shifts up to this many periods are told apart by image codes.
+  static constexpr long kMaxImageShift = 16384;
+  static int image_code(long kx, long ky) {
+    return static_cast<int>(((kx + kMaxImageShift) << 15) | (ky + kMaxImageShift));
+  }
+  // A hint (no effect on any result): the columns meeting [x -+ reach] x [y -+ reach] will be read from
+  // height z down (z = +inf: from their top). Stage 0 asks for the columns' headers, stage 1 for their
+  // layer tables, stage 2 for the entries of the two layers at z; a caller issues the stages for a
+  // drop two, one and zero steps ahead, so each stage finds the memory the one before asked for.
+  void prefetch(double x, double y, double reach, double z, int stage) const;
+
+  // Columns held (an open floor grows them as the heap spreads).
+  std::size_t column_count() const { return columns_.size(); }
+
+  double cell() const { return h_; }
+
+  // f(index, centre, radius, image) for every grain in the cells meeting [lo, hi]; the centre is
+  // that of the periodic image found, and image a code telling images of one grain apart: distinct
+  // for every image shift (kx, ky) with |kx|, |ky| < kMaxImageShift (image_code; queries wider than
+  // that are refused with std::length_error).
+  template <class F>
+  void visit_box(const Vec3& lo, const Vec3& hi, F&& f) const;
+
+  // Visits the cells of the columns meeting [x -+ reach] x [y -+ reach], layer by layer from the
+  // highest occupied layer down; before each layer calls keep_going(top of layer) and stops on false.
+  template <class F, class G>
+  void visit_column_down(double x, double y, double reach, double z_start, G&& keep_going, F&& f) const;
+
+ private:
+  struct Range { long lo, hi; };
+  Range x_range(double lo, double hi) const;
+  Range y_range(double lo, double hi) const;
+  long column_of(long ix, long iy) const { return (ix - ix0_) + nx_ * (iy - iy0_); }
+  void grow_to(long ix, long iy);
+  static long floor_div(long a, long b) {
+    if (a >= 0 && a < b) return 0;  // inside the period: no division (the usual case)
+    return a >= 0 ? a / b : -((-a + b - 1) / b);
+  }
+
+  template <class F>
+  void visit_cell_range(Range rx, Range ry, long iz_lo, long iz_hi, F&& f) const;
+
+  int dimension_;
+  bool wrap_x_, wrap_y_;  // periodic axes (wraps_x, wraps_y of the container)
+  bool grows_;       // open floor: the footprint is unknown in advance
+  double h_;         // cell height and nominal width
+  double hx_, hy_;   // cell widths (periodic: the period divided into whole cells)
+  double x0_, y0_;   // coordinate of column index 0
+  double period_x_ = 0.0, period_y_ = 0.0;
+  long ix0_ = 0, iy0_ = 0;  // index range held: [ix0, ix0 + nx)
+  long nx_ = 1, ny_ = 1;
+  // A cell keeps copies of its grains' centres and radii, so a query reads memory in order.
+  struct Entry {
+    double x, y, z, r;
+    std::int32_t index;
+  };
+  // The cells of one column stored contiguously, layer after layer, each in insertion order: a query
+  // over a run of layers reads one block of memory instead of one heap block per cell.
+  struct Column {
+    std::vector<std::uint32_t> start;  // layer iz holds entries [start[iz], start[iz + 1]); empty: no layer
+    std::vector<Entry> entries;
+    long layers() const { return start.empty() ? 0 : static_cast<long>(start.size()) - 1; }
+  };
+  std::vector<Column> columns_;
+};
+
+template <class F>
+void NeighbourGrid::visit_cell_range(Range rx, Range ry, long iz_lo, long iz_hi, F&& f) const {
+  // First gather the runs of entries of every column and ask for their first cache lines, so the memory
+  // loads overlap; then visit them in the same order (column by column, layer by layer).
+  struct Run {
+    const Entry *begin, *end;
+    double sx, sy;
+    int image;
+  };
+  constexpr int kBatch = 32;
+  Run runs[kBatch];
+  int n = 0;
+  auto flush = [&] {
+    for (int k = 0; k < n; ++k) {
+      const Run& run = runs[k];
+      for (const Entry* e = run.begin; e != run.end; ++e)
+        f(e->index, Vec3(e->x + run.sx, e->y + run.sy, e->z), e->r, run.image);
+    }
+    n = 0;
+  };
+  for (long iy = ry.lo; iy <= ry.hi; ++iy) {
+    long wy = iy, ky = 0;
+    if (wrap_y_) { ky = floor_div(iy, ny_); wy = iy - ky * ny_; }
+    else if (iy < iy0_ || iy >= iy0_ + ny_) continue;
+    for (long ix = rx.lo; ix <= rx.hi; ++ix) {
+      long wx = ix, kx = 0;
+      if (wrap_x_) { kx = floor_div(ix, nx_); wx = ix - kx * nx_; }
+      else if (ix < ix0_ || ix >= ix0_ + nx_) continue;
+      const Column& column = columns_[column_of(wx, wy)];
+      const long top = std::min<long>(iz_hi, column.layers() - 1), bottom = std::max(0L, iz_lo);
+      if (top < bottom) continue;
+      const Entry* begin = column.entries.data() + column.start[bottom];
+      const Entry* end = column.entries.data() + column.start[top + 1];
+      if (begin == end) continue;
+      __builtin_prefetch(begin);
+      __builtin_prefetch(reinterpret_cast<const char*>(begin) + 64);
+      runs[n++] = Run{begin, end, kx * period_x_, ky * period_y_, image_code(kx, ky)};
+      if (n == kBatch) flush();
+    }
+  }
+  flush();
+}
+
+template <class F>
+void NeighbourGrid::visit_box(const Vec3& lo, const Vec3& hi, F&& f) const {
+  visit_cell_range(x_range(lo.x(), hi.x()), y_range(lo.y(), hi.y()),
+                   static_cast<long>(std::floor(lo.z() / h_)), static_cast<long>(std::floor(hi.z() / h_)), f);
+}
+
+template <class F, class G>
+void NeighbourGrid::visit_column_down(double x, double y, double reach, double z_start, G&& keep_going,
+                                      F&& f) const {
+  // The columns are looked up once (a fall usually reads two or three layers of each); then layer by
+  // layer, in the order visit_cell_range would take them, with the first lines of each run prefetched.
+  struct Col {
+    const Column* column;
+    double sx, sy;
+    int image;
+  };
+  constexpr int kMaxCols = 64;
+  Range rx = x_range(x - reach, x + reach), ry = y_range(y - reach, y + reach);
+  if ((rx.hi - rx.lo + 1) * (ry.hi - ry.lo + 1) > kMaxCols) {  // not reached with the reach of one grain
+    long top = -1;
+    for (long iy = ry.lo; iy <= ry.hi; ++iy)
+      for (long ix = rx.lo; ix <= rx.hi; ++ix) {
+        long wx = ix, wy = iy;
+        if (wrap_y_) wy = iy - floor_div(iy, ny_) * ny_;
+        else if (iy < iy0_ || iy >= iy0_ + ny_) continue;
+        if (wrap_x_) wx = ix - floor_div(ix, nx_) * nx_;
+        else if (ix < ix0_ || ix >= ix0_ + nx_) continue;
+        top = std::max<long>(top, columns_[column_of(wx, wy)].layers() - 1);
+      }
+    top = std::min<long>(top, static_cast<long>(std::floor(z_start / h_)));
+    for (long iz = top; iz >= 0; --iz) {
+      if (!keep_going((iz + 1) * h_)) return;
+      visit_cell_range(rx, ry, iz, iz, f);
+    }
+    return;
+  }
+  Col cols[kMaxCols];
+  int n = 0;
+  long top = -1;
+  for (long iy = ry.lo; iy <= ry.hi; ++iy) {
+    long wy = iy, ky = 0;
+    if (wrap_y_) { ky = floor_div(iy, ny_); wy = iy - ky * ny_; }
+    else if (iy < iy0_ || iy >= iy0_ + ny_) continue;
+    for (long ix = rx.lo; ix <= rx.hi; ++ix) {
+      long wx = ix, kx = 0;
+      if (wrap_x_) { kx = floor_div(ix, nx_); wx = ix - kx * nx_; }
+      else if (ix < ix0_ || ix >= ix0_ + nx_) continue;
+      const Column& column = columns_[column_of(wx, wy)];
+      if (column.layers() == 0) continue;
+      top = std::max<long>(top, column.layers() - 1);
+      cols[n++] = Col{&column, kx * period_x_, ky * period_y_, image_code(kx, ky)};
+    }
+  }
+  top = std::min<long>(top, static_cast<long>(std::floor(z_start / h_)));
+  for (long iz = top; iz >= 0; --iz) {
+    if (!keep_going((iz + 1) * h_)) return;
+    for (int k = 0; k < n; ++k) {
+      const Column& column = *cols[k].column;
+      if (iz < column.layers()) __builtin_prefetch(column.entries.data() + column.start[iz]);
+    }
+    for (int k = 0; k < n; ++k) {
+      const Column& column = *cols[k].column;
+      if (iz >= column.layers()) continue;
+      const Entry* e = column.entries.data() + column.start[iz];
+      const Entry* end = column.entries.data() + column.start[iz + 1];
+      for (; e != end; ++e) f(e->index, Vec3(e->x + cols[k].sx, e->y + cols[k].sy, e->z), e->r, cols[k].image);
+    }
+  }
+}
+
+}  // namespace btr

@@ -1,0 +1,87 @@
+#include "coupling/dem/dem_walls.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace btr {
+
+double DemWall::distance(const Vec3& x) const {
+  if (kind == Kind::Cylinder) return position - std::hypot(x.x(), x.y());
+  return inward * (x[axis] - position);
+}
+
+namespace {
+
+void require_positive(double v, const char* what, const Container& c) {
+  if (!(v > 0.0) || !std::isfinite(v))
+    throw std::runtime_error(std::string("container '") + to_string(c.kind) + "': " + what +
+                             " must be a positive number, got " + std::to_string(v));
+}
+
+DemWall plane(const char* name, int axis, double pos, int inward) {
+  DemWall w;
+  w.kind = DemWall::Kind::Plane;
+  w.name = name;
+  w.axis = axis;
+  w.position = pos;
+  w.inward = inward;
+  return w;
+}
+
+}  // namespace
+
+std::vector<DemWall> dem_walls(const Container& c, int dimension) {
+  if (dimension != 2 && dimension != 3)
+    throw std::runtime_error("dimension must be 2 or 3, got " + std::to_string(dimension));
+  std::vector<DemWall> walls{plane("floor", 2, 0.0, +1)};
+  switch (c.kind) {
+    case ContainerKind::Open:
+      break;
+    case ContainerKind::Periodic:
+      require_positive(c.size_x, "size_x", c);
+      if (dimension == 3) require_positive(c.size_y, "size_y", c);
+      break;
+    case ContainerKind::Box:
+      require_positive(c.size_x, "size_x", c);
+      walls.push_back(plane("x-", 0, -0.5 * c.size_x, +1));
+      walls.push_back(plane("x+", 0, 0.5 * c.size_x, -1));
+      if (dimension == 3) {
+        require_positive(c.size_y, "size_y", c);
+        walls.push_back(plane("y-", 1, -0.5 * c.size_y, +1));
+        walls.push_back(plane("y+", 1, 0.5 * c.size_y, -1));
+      }
+      break;
+    case ContainerKind::HeleShaw:
+      if (dimension != 3) throw std::runtime_error("container 'hele-shaw' exists in 3D only");
+      require_positive(c.size_x, "size_x", c);
+      require_positive(c.gap, "gap", c);
+      walls.push_back(plane("x-", 0, -0.5 * c.size_x, +1));
+      walls.push_back(plane("x+", 0, 0.5 * c.size_x, -1));
+      walls.push_back(plane("y-", 1, -0.5 * c.gap, +1));
+      walls.push_back(plane("y+", 1, 0.5 * c.gap, -1));
+      break;
+    case ContainerKind::Cylinder: {
+      if (dimension != 3) throw std::runtime_error("container 'cylinder' exists in 3D only");
+      require_positive(c.radius, "radius", c);
+      DemWall w;
+      w.kind = DemWall::Kind::Cylinder;
+      w.name = "cylinder";
+      w.position = c.radius;
+      walls.push_back(w);
+      break;
+    }
+    case ContainerKind::Drum:
+      // Refused rather than approximated: the drum's wall is a horizontal cylinder (LIGGGHTS would need a
+      // mesh or a rotated region wall, YADE a facet cylinder), and no export of it, with end walls or
+      // periodic ends, has been written or checked against the engines yet.
+      throw std::runtime_error(
+          std::string("container 'drum'") +
+          (dimension == 3 ? (c.periodic_ends ? " (periodic ends)" : " (flat end walls)") : "") +
+          ": DEM export of a rotating-drum packing, with flat end walls or periodic ends, is not supported (its "
+          "wall is a horizontal cylinder, which the LIGGGHTS and YADE writers do not export); relax packings "
+          "built in an open, box, periodic, hele-shaw or cylinder container");
+  }
+  return walls;
+}
+
+}  // namespace btr

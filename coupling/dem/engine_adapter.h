@@ -1,0 +1,88 @@
+#pragma once
+// What relax.cpp needs from each engine: write its inputs, say how to run them, read the result back.
+// One implementation per engine: liggghts_adapter.cpp, yade_adapter.cpp.
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "coupling/dem/relax.h"
+
+namespace btr {
+
+// In-run compaction to a target bulk packing fraction (btr relax --target-phi; relax_target.h), run before
+// the stop rule: friction scaled by friction_scales[k] (k = 0 first; the next one once the bed is at rest,
+// kinetic energy and its mean below rest_kinetic, still below the target), damping `damping`, the packing
+// fraction of the window checked every steps_per_check steps (each grain's exact part between the window's
+// planes, for the grains whose centre lies in its lateral bounds); at the target (or when
+// the last scale is at rest) the scene's friction is restored, every grain is stopped (velocities and spins
+// zeroed), the plan's damping replaces `damping`, and the stop rule runs as without compaction, armed anew.
+struct CompactionPlan {
+  bool enabled = false;
+  double target = 0.0;                  // bulk packing fraction (area fraction in 2D)
+  std::vector<double> friction_scales;  // decreasing, in [0, 1)
+  double damping = 0.0;                 // during the compaction, as RelaxPlan::damping
+  double timestep = 0.0;                // s, during the compaction (the settle uses RelaxPlan::timestep)
+  double timestep_fraction = 0.0;       // of the Rayleigh / contact time, as relax.timestep_fraction
+  bool slab = false;                    // the window spans the periodic footprint (lo/hi x, y unused)
+  Vec3 window_lo = Vec3::Zero(), window_hi = Vec3::Zero();  // 2D: x and z used
+  double window_measure = 0.0;          // m^3 (3D) or m^2 (2D)
+  double initial_phi = 0.0;             // of the starting packing, by btr measure's exact definition
+  long steps_per_check = 0;
+  long max_checks_per_scale = 0;        // each scale runs at most max_time
+  double rest_kinetic = 0.0;            // J
+};
+
+// The numbers every engine input is built from, computed once by relax.cpp.
+struct RelaxPlan {
+  double timestep = 0.0;        // s, already checked against the stable step
+  std::string timestep_rule;    // one line, e.g. "Rayleigh time 1.2e-5 s x 0.2 (Hertz, smallest grain)"
+  double stable_timestep = 0.0; // s, the rule's step (equal to timestep unless requested or forced)
+  bool timestep_forced = false; // RelaxSettings::forced_timestep was used: the step was not checked
+  double max_time = 0.0;        // simulated seconds
+  double kinetic_threshold = 0.0;  // J: stop when the total kinetic energy falls below this
+  double largest_overlap = 0.0;    // of the input packing, relative to the smaller radius
+                                   // (pre-loaded: beyond the intended overlap)
+  double arming_time = 0.0;        // s; 0: stop_arming_time(grains) (a pre-loaded start arms sooner)
+  std::string stop_rule = "kinetic-energy";  // scene relax.stop_rule
+  double unbalanced_threshold = 1e-3;        // unbalanced-force: stop below this ratio
+  double displacement_threshold = 0.0;       // displacement: stop below this largest displacement per window [m]
+  double damping = 0.0;                      // YADE's NewtonIntegrator damping; 0 = off
+  // Open containers: grains whose centre leaves [lo, hi] laterally are removed and counted (lo/hi[1] unused
+  // in 2D). Other containers: has_region is false.
+  bool has_region = false;
+  double region_lo[2] = {0.0, 0.0}, region_hi[2] = {0.0, 0.0};
+  CompactionPlan compaction;  // enabled only with a target packing fraction
+};
+
+// The threshold of the plan's stop rule: J (kinetic-energy), a ratio (unbalanced-force) or m (displacement).
+inline double stop_threshold(const RelaxPlan& plan) {
+  if (plan.stop_rule == "kinetic-energy") return plan.kinetic_threshold;
+  if (plan.stop_rule == "unbalanced-force") return plan.unbalanced_threshold;
+  return plan.displacement_threshold;
+}
+
+struct EngineCommand {
+  std::vector<std::string> argv;            // argv[0] is looked up on PATH
+  std::map<std::string, std::string> env;   // added to the environment
+};
+
+class EngineAdapter {
+ public:
+  virtual ~EngineAdapter() = default;
+  // Writes every input file into dir (which exists); returns their paths.
+  virtual std::vector<std::string> write_inputs(const Packing& packing, const Scene& scene,
+                                                const RelaxSettings& settings, const RelaxPlan& plan,
+                                                const std::string& dir) const = 0;
+  virtual EngineCommand command(const std::string& dir, const RelaxSettings& settings) const = 0;
+  // The engine's own log file inside dir (kept; its tail goes into failure messages).
+  virtual std::string log_file(const std::string& dir) const = 0;
+  // Reads the outputs in dir; throws EngineFailure if they show a failed run.
+  virtual RelaxResult read_back(const std::string& dir, const Packing& original, const Scene& scene,
+                                const RelaxPlan& plan) const = 0;
+};
+
+std::unique_ptr<EngineAdapter> make_liggghts_adapter();
+std::unique_ptr<EngineAdapter> make_yade_adapter();
+
+}  // namespace btr

@@ -1,0 +1,130 @@
+#include "coupling/dem/relax_target.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <string>
+
+#include "btr/model/number_text.h"
+#include "coupling/dem/relax_plan.h"
+
+namespace btr {
+
+namespace {
+// The packing fraction is checked this often during the compaction: a free collapse gains ~0.002 per 100
+// steps near the target (bed3d), so a check every 50 steps overshoots by at most about the pours' own
+// seed-to-seed spread.
+constexpr long kCompactionCheckSteps = 50;
+// A friction scale has brought the bed to rest when its kinetic energy and its mean are below this many times
+// the stop threshold: the compaction only needs the rearrangement to end, not the settle's rest.
+constexpr double kRestLoosening = 100.0;
+
+}  // namespace
+
+Scene with_friction_scaled(const Scene& scene, double scale) {
+  Scene s = scene;
+  for (Component& c : s.grains.components) {
+    c.material.friction *= scale;
+    c.material.rolling_friction *= scale;
+  }
+  return s;
+}
+
+double bulk_packing_fraction(const Grains& grains, const Scene& scene, double margin) {
+  MetricsOptions o;
+  o.margin_diameters = margin;
+  const BulkMeasures b = bulk_measures(grains, scene.dimension, scene.container, o);
+  return b.valid ? b.packing_fraction : std::numeric_limits<double>::quiet_NaN();
+}
+
+CompactionPlan plan_compaction(const Packing& packing, const Scene& scene, const RelaxSettings& settings,
+                               double timestep, double kinetic_threshold) {
+  CompactionPlan c;
+  const std::optional<double> target = settings.target_phi ? settings.target_phi : scene.relax.target_phi;
+  if (!target) return c;
+  c.target = *target;
+  if (!(c.target > 0.0 && c.target < 1.0))
+    throw RelaxRefused("target packing fraction must be in (0, 1), got " + g6(c.target));
+  c.friction_scales = settings.friction_scales ? *settings.friction_scales : scene.relax.friction_scales;
+  if (c.friction_scales.empty()) throw RelaxRefused("target packing fraction: no friction scale to try");
+  for (std::size_t k = 0; k < c.friction_scales.size(); ++k)
+    if (!(c.friction_scales[k] >= 0.0 && c.friction_scales[k] < 1.0 &&
+          (k == 0 || c.friction_scales[k] < c.friction_scales[k - 1])))
+      throw RelaxRefused("target packing fraction: friction scales must decrease within [0, 1)");
+  c.damping = settings.compaction_damping ? *settings.compaction_damping : scene.relax.compaction_damping;
+  if (!(c.damping >= 0.0 && c.damping < 1.0))
+    throw RelaxRefused("target packing fraction: compaction damping must be in [0, 1), got " + g6(c.damping));
+  c.timestep_fraction = settings.compaction_timestep_fraction ? *settings.compaction_timestep_fraction
+                        : scene.relax.compaction_timestep_fraction ? *scene.relax.compaction_timestep_fraction
+                                                                    : scene.relax.timestep_fraction;
+  if (!(c.timestep_fraction > 0.0 && c.timestep_fraction <= 1.0))
+    throw RelaxRefused("target packing fraction: the compaction's time-step fraction must be in (0, 1], got " +
+                       g6(c.timestep_fraction));
+  c.timestep = timestep * c.timestep_fraction / scene.relax.timestep_fraction;
+  for (const Grain& g : packing.grains)
+    if (g.cluster != 0)
+      throw RelaxRefused("target packing fraction: the packing has rigid clusters (grain " +
+                         std::to_string(&g - packing.grains.data() + 1) +
+                         "); the compaction's friction switch and stop of every grain are not written for rigid "
+                         "bodies: relax without --target-phi");
+
+  MetricsOptions o;
+  o.margin_diameters = settings.target_margin;
+  const BulkMeasures b = bulk_measures(packing.grains, scene.dimension, scene.container, o);
+  if (!b.valid)
+    throw RelaxRefused("target packing fraction: the packing has no bulk window to measure (" + b.note +
+                       "); use a smaller --target-margin or a deeper packing");
+  c.initial_phi = b.packing_fraction;
+  if (c.initial_phi >= c.target) return c;  // already there: no compaction
+
+  double d_max = 0.0;
+  for (const Grain& g : packing.grains) d_max = std::max(d_max, 2.0 * g.r);
+  const double m = settings.target_margin * d_max;
+  c.slab = b.slab;
+  c.window_lo = b.window.lo;
+  c.window_hi = b.window.hi;
+  c.window_hi.z() = (b.window.hi.z() + m) * c.initial_phi / c.target - m;
+  if (!(c.window_hi.z() > c.window_lo.z()))
+    throw RelaxRefused("target packing fraction: the bed is too shallow to keep a bulk window through a compaction "
+                       "from " + g6(c.initial_phi) + " to " + g6(c.target) + "; use a smaller --target-margin");
+  const double height = c.window_hi.z() - c.window_lo.z();
+  const double dx = c.window_hi.x() - c.window_lo.x(), dy = c.window_hi.y() - c.window_lo.y();
+  c.window_measure = scene.dimension == 3 ? dx * dy * height : dx * height;
+  c.steps_per_check = kCompactionCheckSteps;
+  c.max_checks_per_scale =
+      std::max(1L, static_cast<long>(std::ceil(scene.relax.max_time / c.timestep / kCompactionCheckSteps)));
+  c.rest_kinetic = kRestLoosening * kinetic_threshold;
+  c.enabled = true;
+  return c;
+}
+
+nlohmann::json target_phi_record(const CompactionPlan& plan, const RelaxResult& result, const Scene& scene,
+                                 double margin) {
+  const double settled = bulk_packing_fraction(result.relaxed.grains, scene, margin);
+  nlohmann::json rec = {
+      {"target", plan.target},
+      {"window_margin_diameters", margin},
+      {"initial_bulk_packing_fraction", plan.initial_phi},
+      {"settled_bulk_packing_fraction", std::isfinite(settled) ? nlohmann::json(settled) : nlohmann::json(nullptr)},
+      {"compaction_ran", plan.enabled},
+      {"reached", plan.enabled ? result.compaction.reached : true},
+  };
+  if (plan.enabled)
+    rec.update({{"friction_scales", plan.friction_scales},
+                {"compaction_damping", plan.damping},
+                {"compaction_timestep", plan.timestep},
+                {"compaction_timestep_fraction", plan.timestep_fraction},
+                {"friction_scale_at_end", result.compaction.friction_scale},
+                {"friction_restored_at", result.compaction.time},
+                {"in_run_packing_fraction_at_end", result.compaction.packing_fraction},
+                {"recipe", "in one engine run: friction scaled (friction_scales, the next when the bed came to rest "
+                           "below the target) with compaction_damping until the packing fraction "
+                           "of the bulk window reached the target; then the scene's friction restored, every "
+                           "grain stopped, and the scene's stop rule run with relax.damping"}});
+  else
+    rec["recipe"] = "the packing already had the target: relaxed without compaction";
+  return rec;
+}
+
+}  // namespace btr

@@ -1,0 +1,44 @@
+#pragma once
+// Relaxation that lands on a target bulk packing fraction: the friction-reduction recipe YADE users know
+// (REFD-style compaction: friction lowered while the packing fraction is watched, restored once it reaches
+// the target), run inside the one engine run of the relaxation. The engine watches the packing fraction of
+// the bulk window every few steps; the writers (liggghts_script.cpp, yade_script.cpp)
+// emit the compaction phase from the CompactionPlan made here (engine_adapter.h says what it does).
+//
+// Why in the run and not as separate runs to rest at each friction: the compaction of a BTR bed is a
+// collapse under gravity that overshoots any target if it runs to rest without friction (bed3d, 10 000
+// grains: 0.645 against the pour's 0.626), and each run to rest costs a relaxation. Watched in the run,
+// the collapse is stopped at the target, and how fast it was allowed to go (compaction_damping) decides how
+// many contacts the settled bed keeps (README, "Target packing fraction").
+#include <string>
+#include <vector>
+
+#include "btr/measures/metrics.h"
+#include "coupling/dem/engine_adapter.h"
+
+namespace btr {
+
+// The scene with every material's friction (and rolling friction) multiplied by scale.
+Scene with_friction_scaled(const Scene& scene, double scale);
+
+// Bulk packing fraction by `btr measure`'s definition (its window, `margin` largest diameters from floor, walls
+// and surface); NaN if the bulk window is empty.
+double bulk_packing_fraction(const Grains& grains, const Scene& scene, double margin = MetricsOptions{}.margin_diameters);
+
+// The compaction phase of a relaxation of `packing`, from settings (which override the scene's relax.target_phi,
+// friction_scales and compaction_damping). Not enabled without a target, or when the packing's bulk packing
+// fraction already reaches it (then only `target` and `initial_phi` are set). The compaction's step is
+// `timestep` (the run's) times its time-step fraction over the scene's timestep_fraction. The window is btr measure's bulk
+// window of the starting packing with its top lowered by the compaction the target needs (a bed compacting
+// uniformly from the floor: (top + m) phi0 / target - m, m the margin), so it stays inside the bed.
+// Throws RelaxRefused for a target outside (0, 1), scales that are empty or not decreasing in [0, 1), a
+// compaction damping outside [0, 1), an empty bulk window, or rigid clusters.
+CompactionPlan plan_compaction(const Packing& packing, const Scene& scene, const RelaxSettings& settings,
+                               double timestep, double kinetic_threshold);
+
+// relaxed.json's "target_phi" record: the target, the starting and settled bulk packing fractions (btr measure's
+// definition), whether and how the compaction reached the target, and the recipe.
+nlohmann::json target_phi_record(const CompactionPlan& plan, const RelaxResult& result, const Scene& scene,
+                                 double margin);
+
+}  // namespace btr

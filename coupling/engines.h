@@ -1,0 +1,24 @@
+#pragma once
+// The engines the coupling drives, chosen by name: one adapter per engine (coupling/liggghts/,
+// coupling/yade/), and the two entry points that pick one. The only coupling code that sees every engine.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "coupling/dem/engine_adapter.h"
+#include "coupling/dem/relax.h"
+
+namespace btr {
+
+// "liggghts" or "yade"; throws RelaxRefused for anything else.
+std::unique_ptr<EngineAdapter> make_adapter(const std::string& engine);
+
+// Write-only: the input files for `engine` ("liggghts" | "yade") into dir; returns their paths.
+std::vector<std::string> export_inputs(const Packing& packing, const Scene& scene, const std::string& engine,
+                                       const RelaxSettings& settings, const std::string& dir);
+
+// Writes the inputs into out_dir, runs the engine there, and reads the result back.
+RelaxResult relax(const Packing& packing, const Scene& scene, const std::string& engine,
+                  const RelaxSettings& settings, const std::string& out_dir);
+
+}  // namespace btr

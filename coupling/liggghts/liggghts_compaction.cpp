@@ -1,0 +1,95 @@
+#include "coupling/liggghts/liggghts_compaction.h"
+
+#include <sstream>
+
+#include "btr/model/number_text.h"
+#include "coupling/liggghts/liggghts_script.h"
+
+namespace btr {
+
+std::string liggghts_compaction_setup(const CompactionPlan& c, int dimension) {
+  std::ostringstream s;
+  auto bound = [&](int axis, bool lo) {
+    if (c.slab || (dimension == 2 && axis == 1)) return std::string("INF");
+    return g17(lo ? c.window_lo[axis] : c.window_hi[axis]);
+  };
+  const std::string zlo = g17(c.window_lo.z()), zhi = g17(c.window_hi.z());
+  // LIGGGHTS 3.8's atom-style variables have no min/max: min(x, y) = (x + y - |x - y|) / 2, max likewise.
+  auto max = [](const std::string& x, const std::string& y) { return "0.5*(" + x + "+" + y + "+abs(" + x + "-(" + y + ")))"; };
+  auto min = [](const std::string& x, const std::string& y) { return "0.5*(" + x + "+" + y + "-abs(" + x + "-(" + y + ")))"; };
+  s << "\n# Compaction to the target packing fraction: the solid fraction of the bulk window (btr measure's window of\n"
+    << "# the starting packing, its top lowered by the compaction to come): each grain's part between the window's\n"
+    << "# planes, exactly (cap volumes; 2D: disk segments), of the grains whose centre lies in its lateral bounds.\n"
+    << "region btr_bulk block " << bound(0, true) << " " << bound(0, false) << " " << bound(1, true) << " "
+    << bound(1, false) << " INF INF units box\n"
+    // [a, b]: the grain's extent [z - r, z + r] clipped to the window, empty (a = b) where they do not meet
+    << "variable btr_cut_a0 atom " << max(zlo, "z-c_btr_radius") << "\n"
+    << "variable btr_cut_a atom " << min("v_btr_cut_a0", "z+c_btr_radius") << "\n"
+    << "variable btr_cut_b0 atom " << min(zhi, "z+c_btr_radius") << "\n"
+    << "variable btr_cut_b atom " << max("v_btr_cut_b0", "v_btr_cut_a") << "\n";
+  if (dimension == 3) {
+    s << "variable btr_grain_volume atom 3.1415926535897931*(c_btr_radius*c_btr_radius*(v_btr_cut_b-v_btr_cut_a)-"
+         "((v_btr_cut_b-z)^3-(v_btr_cut_a-z)^3)/3.0)\n";
+  } else {  // r^2 [u sqrt(1 - u^2) + asin u] between u = (a - z) / r and (b - z) / r, u kept in [-1, 1]
+    const std::string ua = min(max("(v_btr_cut_a-z)/c_btr_radius", "-1.0"), "1.0");
+    const std::string ub = min(max("(v_btr_cut_b-z)/c_btr_radius", "-1.0"), "1.0");
+    s << "variable btr_cut_ua atom " << ua << "\n"
+      << "variable btr_cut_ub atom " << ub << "\n"
+      << "variable btr_grain_volume atom c_btr_radius*c_btr_radius*(v_btr_cut_ub*sqrt(abs(1.0-v_btr_cut_ub^2))+"
+         "asin(v_btr_cut_ub)-v_btr_cut_ua*sqrt(abs(1.0-v_btr_cut_ua^2))-asin(v_btr_cut_ua))   # 2D: areas\n";
+  }
+  s << "compute btr_bulk_volume all reduce/region btr_bulk sum v_btr_grain_volume\n"
+    << "variable btr_phi equal c_btr_bulk_volume/" << g17(c.window_measure) << "\n";
+  return s.str();
+}
+
+std::string liggghts_compaction_loop(const CompactionPlan& c, const Grains& grains, const Scene& scene,
+                                     double settle_damping, double settle_timestep, double arming_time) {
+  std::ostringstream s;
+  const std::string target = g17(c.target), rest = g17(c.rest_kinetic);
+  s << "# Compaction: friction x";
+  for (double f : c.friction_scales) s << " " << g6(f);
+  s << " in turn (the next once the bed is at rest, kinetic energy and its mean below " << g6(c.rest_kinetic)
+    << " J),\n# damping " << g6(c.damping) << ", until btr_phi >= " << g6(c.target) << ", checked every "
+    << c.steps_per_check << " steps; each scale runs at most max_time;\n# time step " << g6(c.timestep)
+    << " s (fraction " << g6(c.timestep_fraction) << " of the rule's characteristic time; the settle's: "
+    << g6(settle_timestep) << " s).\n";
+  if (c.timestep != settle_timestep) s << "timestep " << g17(c.timestep) << "\n";
+  for (std::size_t k = 0; k < c.friction_scales.size(); ++k) {
+    const std::string scale = g6(c.friction_scales[k]), n = std::to_string(k + 1);
+    if (k > 0)
+      s << liggghts_friction_fixes(scene, c.friction_scales[k]) << "run 0 post no\n";
+    s << "variable btr_crest equal ${btr_time}+" << g17(arming_time) << "\n"
+      << "label btr_compact_" << n << "\n"
+      << "variable btr_compact_check_" << n << " loop " << c.max_checks_per_scale << "\n"
+      << "run " << c.steps_per_check << " pre no post no\n"
+      << "if \"${btr_ekin} > ${btr_bound}\" then &\n"
+      << "  \"print 'BTR-FAILURE kinetic energy ${btr_ekin} J above the bound ${btr_bound} J at t = ${btr_time} s'\" "
+         "quit\n"
+      << "if \"${btr_phi} >= " << target << "\" then &\n"
+      << "  \"print 'BTR-COMPACTION-END reached friction x " << scale << " t = ${btr_time} s phi = ${btr_phi}'\" &\n"
+      << "  \"jump SELF btr_compaction_done\"\n"
+      << "if \"${btr_time} >= ${btr_crest} && ${btr_kmean} < " << rest << " && ${btr_ekin} < " << rest
+      << "\" then \"jump SELF btr_compact_rest_" << n << "\"\n"
+      << "next btr_compact_check_" << n << "\n"
+      << "jump SELF btr_compact_" << n << "\n"
+      << "label btr_compact_rest_" << n << "\n"
+      << "print \"BTR-COMPACTION-REST friction x " << scale << " t = ${btr_time} s phi = ${btr_phi}\"\n";
+  }
+  s << "print \"BTR-COMPACTION-END not-reached friction x " << g6(c.friction_scales.back())
+    << " t = ${btr_time} s phi = ${btr_phi}\"\n"
+    << "label btr_compaction_done\n"
+    << "# The scene's friction back, every grain stopped, the settle's damping and step, the stop rule armed anew.\n"
+    << (c.timestep != settle_timestep ? "timestep " + g17(settle_timestep) + "\n" : std::string())
+    << liggghts_friction_fixes(scene)
+    << "velocity all set 0.0 0.0 0.0\n"
+    << "set group all omegax 0.0 omegay 0.0 omegaz 0.0\n";
+  if (c.damping > 0) s << "unfix " << kCompactionDampingFix << "\n";
+  if (settle_damping > 0) s << liggghts_viscous_fix("btr_damping", grains, scene, settle_damping);
+  s << "run 0 post no\n"
+    << "variable btr_tarm equal ${btr_time}+" << g17(arming_time) << "\n"
+    << "variable btr_armed equal 0\n\n";
+  return s.str();
+}
+
+}  // namespace btr

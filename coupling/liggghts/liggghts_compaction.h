@@ -1,0 +1,28 @@
+#pragma once
+// The LIGGGHTS script's compaction phase (btr relax --target-phi; CompactionPlan in engine_adapter.h says what
+// it does): a region for the bulk window's lateral bounds, its packing fraction (v_btr_phi: each grain's exact
+// part between the window's planes), and the
+// loop that runs before the stop rule's loop, one block per friction scale.
+#include <string>
+
+#include "coupling/dem/engine_adapter.h"
+
+namespace btr {
+
+// The fix ID of the damping during the compaction (replaced by btr_damping, the plan's, when it ends).
+inline constexpr const char* kCompactionDampingFix = "btr_compaction_damping";
+
+// Region btr_bulk, the per-grain volume (area in 2D), compute btr_bulk_volume and variable btr_phi. Needs
+// compute btr_radius; v_btr_phi must be in the thermo output (computes are evaluated on thermo steps).
+std::string liggghts_compaction_setup(const CompactionPlan& c, int dimension);
+
+// The loop: needs the variables btr_ekin, btr_kmean, btr_phi, btr_time and btr_bound, and the friction fixes
+// btr_friction (btr_rolling) of liggghts_friction_fixes. Prints "BTR-COMPACTION-END reached|not-reached
+// friction x S t = T s phi = P" (read back by liggghts_readback.cpp), then restores the friction, stops every
+// grain, swaps the compaction's damping and step for the settle's (`settle_damping`, 0 = none;
+// `settle_timestep`, the run's step, which the compaction's c.timestep replaces until then) and re-arms the stop
+// rule: btr_tarm = now + arming_time, btr_armed = 0.
+std::string liggghts_compaction_loop(const CompactionPlan& c, const Grains& grains, const Scene& scene,
+                                     double settle_damping, double settle_timestep, double arming_time);
+
+}  // namespace btr

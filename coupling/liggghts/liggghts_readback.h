@@ -1,0 +1,34 @@
+#pragma once
+// Reading a LIGGGHTS relaxation back: the log (thermo rows, BTR-STOP / BTR-FAILURE markers, ERROR
+// lines) and the two final dumps written by the script of liggghts_script.h.
+#include <limits>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "coupling/dem/engine_adapter.h"
+
+namespace btr {
+
+struct LiggghtsLog {
+  std::vector<std::pair<double, double>> kinetic;  // (time, kinetic energy), one row per thermo output
+  std::string stop_reason;                         // the rule that fired, "max-time", or "" (none printed)
+  double stop_time = 0.0;
+  double stop_value = std::numeric_limits<double>::quiet_NaN();  // "value = V" of the BTR-STOP line
+  double final_unbalanced_force = std::numeric_limits<double>::quiet_NaN();  // BTR-FINAL line
+  std::string failure;                             // first ERROR / BTR-FAILURE line, or a non-finite value
+  RelaxResult::Compaction compaction;              // the BTR-COMPACTION-END line, if any
+};
+
+// Throws EngineFailure if the log cannot be read.
+LiggghtsLog parse_liggghts_log(const std::string& path);
+
+// Reads dir/log.liggghts, dir/btr_final.dump (positions, velocities) and dir/btr_contacts.dump; throws
+// EngineFailure (with what is wrong) for a failed run, a missing or incomplete dump, missing ids or
+// non-finite values. With plan.has_region (open floor), grains missing from the final dump were lost
+// through the fixed lateral bounds: they are listed in RelaxResult::removed (and keep their input
+// position in relaxed.grains), not a failure.
+RelaxResult read_liggghts_result(const std::string& dir, const Packing& original, const Scene& scene,
+                                 const RelaxPlan& plan);
+
+}  // namespace btr

@@ -1,0 +1,211 @@
+// Reads what relax_yade.py wrote into a run folder and turns it into a RelaxResult, or an EngineFailure
+// when the run failed: no or failed status, missing or malformed outputs, NaN, lost grains, grains outside
+// the container, grains sunk into each other (a contact YADE missed), a stop reason the outputs contradict.
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "coupling/dem/dem_walls.h"
+#include "coupling/dem/overlap.h"
+#include "coupling/yade/yade_script.h"
+
+namespace btr {
+namespace {
+
+namespace fs = std::filesystem;
+
+class Reader {
+ public:
+  explicit Reader(std::string dir) : dir_(std::move(dir)) {}
+
+  // relax.cpp adds the tail of the log to the message.
+  [[noreturn]] void fail(const std::string& what) const { throw EngineFailure("YADE run in " + dir_ + ": " + what); }
+
+  // Rows of numbers of a CSV output with exactly this header.
+  std::vector<std::vector<double>> csv(const char* name, const std::string& header) const {
+    const fs::path p = fs::path(dir_) / name;
+    std::ifstream f(p);
+    if (!f) fail("missing output " + p.string());
+    std::string line;
+    if (!std::getline(f, line) || line != header)
+      fail(p.string() + ": line 1 is \"" + line + "\", expected \"" + header + "\"");
+    const std::size_t columns = static_cast<std::size_t>(std::count(header.begin(), header.end(), ',')) + 1;
+    std::vector<std::vector<double>> rows;
+    for (std::size_t n = 2; std::getline(f, line); ++n) {
+      if (line.empty()) continue;
+      std::vector<double> row;
+      std::stringstream ss(line);
+      std::string cell;
+      while (std::getline(ss, cell, ',')) {
+        char* end = nullptr;
+        const double v = std::strtod(cell.c_str(), &end);
+        if (cell.empty() || *end != '\0') fail(p.string() + " line " + std::to_string(n) + ": \"" + cell + "\" is not a number");
+        if (!std::isfinite(v)) fail(p.string() + " line " + std::to_string(n) + ": non-finite value " + cell);
+        row.push_back(v);
+      }
+      if (row.size() != columns)
+        fail(p.string() + " line " + std::to_string(n) + ": " + std::to_string(row.size()) + " values, expected " +
+             std::to_string(columns));
+      rows.push_back(std::move(row));
+    }
+    return rows;
+  }
+
+  nlohmann::json status() const {
+    const fs::path p = fs::path(dir_) / yade_files::kStatus;
+    std::ifstream f(p);
+    if (!f) fail("no status file " + p.string() + ": the script did not run to its end");
+    try {
+      return nlohmann::json::parse(f);
+    } catch (const nlohmann::json::exception& e) {
+      fail(p.string() + " is not valid JSON: " + e.what());
+    }
+  }
+
+ private:
+  std::string dir_;
+};
+
+// Why a grain centre is outside the container (beyond one of its walls: an overlap larger than the radius,
+// the grain went through), or "" if it is inside.
+std::string outside(const std::vector<DemWall>& walls, int dimension, const Vec3& x) {
+  char buf[160];
+  for (const DemWall& w : walls) {
+    const double d = w.distance(x);
+    if (d < 0) {
+      std::snprintf(buf, sizeof buf, "its centre is %.6g m beyond the %s wall", -d, w.name.c_str());
+      return buf;
+    }
+  }
+  if (dimension == 2 && x.y() != 0.0) {
+    std::snprintf(buf, sizeof buf, "off the x-z plane (y = %.6g m)", x.y());
+    return buf;
+  }
+  return "";
+}
+
+// An overlap this large (relative to the smaller radius; the grain's radius against a wall) is no contact
+// the law could hold: the engine missed the contact and one grain went into the other.
+constexpr double kMissedContactOverlap = 0.5;
+
+}  // namespace
+
+RelaxResult yade_read_back(const std::string& dir, const Packing& original, const Scene& scene,
+                           const RelaxPlan& plan) {
+  const Reader in(dir);
+  const nlohmann::json st = in.status();
+  const std::string status = st.value("status", "");
+  if (status != "ok") in.fail("the script reports status \"" + status + "\": " + st.value("message", "(no message)"));
+  const std::string reason = st.value("stop_reason", "");
+  if (reason != "max-time" && reason != plan.stop_rule)
+    in.fail("stop reason \"" + reason + "\" in " + yade_files::kStatus + " is neither the scene's rule \"" + plan.stop_rule +
+            "\" nor max-time");
+
+  RelaxResult result;
+  result.stop_reason = reason;
+  result.simulated_time = st.value("time", 0.0);
+  result.wall_seconds = st.value("wall_seconds", 0.0);
+
+  // Grains removed on an open floor (left the region): packing ids, each once.
+  const std::size_t n = original.grains.size();
+  std::vector<char> removed(n, 0);
+  if (st.contains("removed") && st["removed"].is_array()) {
+    for (const auto& v : st["removed"]) {
+      const std::int64_t id = v.is_number_integer() ? v.get<std::int64_t>() : 0;
+      if (id < 1 || id > static_cast<std::int64_t>(n) || removed[id - 1])
+        in.fail("removed grain " + v.dump() + " in " + yade_files::kStatus + " is unknown or repeated");
+      if (!plan.has_region) in.fail("grains were removed, but only an open floor removes grains");
+      removed[id - 1] = 1;
+      result.removed.push_back(id);
+    }
+  }
+  if (reason != "max-time" && st.contains("stop_value") && st["stop_value"].is_number())
+    result.stop_value = st["stop_value"].get<double>();
+  if (st.contains("final_unbalanced_force") && st["final_unbalanced_force"].is_number())
+    result.final_unbalanced_force = st["final_unbalanced_force"].get<double>();
+  if (st.contains("compaction") && st["compaction"].is_object()) {
+    const nlohmann::json& c = st["compaction"];
+    result.compaction.ran = true;
+    result.compaction.reached = c.value("reached", false);
+    result.compaction.friction_scale = c.value("friction_scale", 0.0);
+    result.compaction.time = c.value("time", 0.0);
+    result.compaction.packing_fraction = c.value("packing_fraction", 0.0);
+  }
+  if (plan.compaction.enabled && !result.compaction.ran)
+    in.fail("the compaction to the target packing fraction did not end (no compaction record)");
+
+  // Final state: one row per grain still in the run, in id order.
+  const auto rows = in.csv(yade_files::kFinal, "id,x,y,z,vx,vy,vz");
+  const std::vector<DemWall> walls = dem_walls(scene.container, scene.dimension);
+  if (rows.size() != n - result.removed.size())
+    in.fail("lost grains: " + std::string(yade_files::kFinal) + " has " + std::to_string(rows.size()) +
+            " grains, the packing " + std::to_string(n) + " (" + std::to_string(result.removed.size()) + " removed)");
+  result.relaxed.grains = original.grains;
+  result.velocities.assign(n, Vec3::Zero());
+  double max_speed = 0.0;
+  std::size_t row = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (removed[i]) continue;
+    const auto& r = rows[row++];
+    if (r[0] != static_cast<double>(i + 1))
+      in.fail(std::string(yade_files::kFinal) + " row " + std::to_string(row) + " has id " + std::to_string(r[0]) +
+              ", expected " + std::to_string(i + 1));
+    const Vec3 x(r[1], r[2], r[3]);
+    const std::string why = outside(walls, scene.dimension, x);
+    if (!why.empty()) in.fail("grain " + std::to_string(i + 1) + " left the container: " + why);
+    result.relaxed.grains[i].x = x;
+    result.velocities[i] = Vec3(r[4], r[5], r[6]);
+    max_speed = std::max(max_speed, result.velocities[i].norm());
+  }
+  // Nearest periodic image, as YADE should have seen each pair.
+  Grains present;
+  for (std::size_t i = 0; i < n; ++i)
+    if (!removed[i]) present.push_back(result.relaxed.grains[i]);
+  const OverlapReport overlap = largest_overlap(present, scene.dimension, scene.container);
+  if (overlap.largest > kMissedContactOverlap)
+    in.fail("grains went into each other: overlap " + overlap.describe() + " (YADE missed the contact)");
+
+  for (const auto& r : in.csv(yade_files::kKinetic, "time,kinetic_energy")) result.kinetic_history.emplace_back(r[0], r[1]);
+  if (result.kinetic_history.empty()) in.fail(std::string(yade_files::kKinetic) + " is empty");
+  const double final_ke = result.kinetic_history.back().second;
+  if (reason == "kinetic-energy" && !(final_ke < plan.kinetic_threshold))
+    in.fail("stop reason is kinetic-energy but the last kinetic energy " + std::to_string(final_ke) +
+            " J is not below the threshold " + std::to_string(plan.kinetic_threshold) + " J");
+  if (reason == "max-time" && result.simulated_time < plan.max_time - 1.5 * plan.timestep)
+    in.fail("stop reason is max-time but the run ended at t = " + std::to_string(result.simulated_time) + " s < " +
+            std::to_string(plan.max_time) + " s");
+
+  for (const auto& r : in.csv(yade_files::kContacts, "i,j,fn,overlap")) {
+    const auto i = static_cast<std::int64_t>(r[0]), j = static_cast<std::int64_t>(r[1]);
+    if (i < 1 || i > static_cast<std::int64_t>(n) || j < 0 || j > static_cast<std::int64_t>(n))
+      in.fail(std::string(yade_files::kContacts) + ": contact " + std::to_string(i) + "-" + std::to_string(j) +
+              " names a grain that does not exist");
+    result.contacts.push_back({i, j, r[2]});
+  }
+
+  result.relaxed.meta = original.meta;
+  result.relaxed.meta["relax"] = {
+      {"engine", "yade"},
+      {"model", scene.relax.model},
+      {"stop_reason", reason},
+      {"simulated_time", result.simulated_time},
+      {"steps", st.value("steps", 0)},
+      {"timestep", plan.timestep},
+      {"timestep_rule", plan.timestep_rule},
+      {"kinetic_threshold", plan.kinetic_threshold},
+      {"final_kinetic_energy", final_ke},
+      {"max_speed", max_speed},
+      {"contacts", result.contacts.size()},
+      {"wall_seconds", result.wall_seconds},
+      {"steps_per_second", st.value("steps_per_second", 0.0)},            // whole script
+      {"loop_steps_per_second", st.value("loop_steps_per_second", 0.0)},  // time stepping alone
+      {"threads", st.value("threads", 0)},
+      {"yade_version", st.value("yade_version", "")},
+  };
+  return result;
+}
+
+}  // namespace btr

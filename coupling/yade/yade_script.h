@@ -1,0 +1,35 @@
+#pragma once
+// The YADE half of the coupling (coupling/yade/yade_adapter.cpp): the batch script that relaxes a packing and the
+// files it reads and writes, all inside one run folder.
+#include <string>
+
+#include "coupling/dem/engine_adapter.h"
+
+namespace btr {
+
+namespace yade_files {
+constexpr const char* kScript = "relax_yade.py";      // generated batch script
+constexpr const char* kPacking = "yade_packing.csv";  // input: id,x,y,z,radius,species
+constexpr const char* kStatus = "yade_status.json";   // written last: status, stop reason, time, steps
+constexpr const char* kFinal = "yade_final.csv";      // id,x,y,z,vx,vy,vz
+constexpr const char* kKinetic = "yade_kinetic.csv";  // time,kinetic_energy
+constexpr const char* kContacts = "yade_contacts.csv";  // i,j,fn,overlap (j = 0 for a wall)
+constexpr const char* kLog = "yade.log";
+}  // namespace yade_files
+
+// Where Debian installs the `yade` Python module (package yade, double precision build).
+constexpr const char* kYadePythonPath = "/usr/lib/x86_64-linux-gnu/yade-double/py";
+
+// The Python functions every script shares (coupling/yade/yade_script_library.cpp).
+const char* yade_script_library();
+
+// The whole script for this packing and scene. Throws std::invalid_argument naming the scene file and
+// the field for what YADE cannot run (unknown model, 2D container without a 2D form, rolling friction with
+// the linear law, ...).
+std::string yade_script(const Packing& packing, const Scene& scene, const RelaxPlan& plan);
+
+// Reads the outputs of a run in dir (see EngineAdapter::read_back).
+RelaxResult yade_read_back(const std::string& dir, const Packing& original, const Scene& scene,
+                           const RelaxPlan& plan);
+
+}  // namespace btr

@@ -1,0 +1,639 @@
+// The Python half of every YADE relaxation script: reading the packing, walls, contact laws, the run loop with
+// its stop rule and failure checks, and the output files. yade_script.cpp writes the header before it and the
+// scene-specific calls (numbers, materials, pairs, grains, walls) after it.
+#include "coupling/yade/yade_script.h"
+
+namespace btr {
+
+const char* yade_script_library() {
+  return R"yade_py(import json
+import math
+import os
+import sys
+import tempfile
+import time
+import traceback
+
+# Everything is read from and written to the folder holding this script, wherever it is run from
+# (`yade -x` runs scripts with __file__ pointing to the launcher, hence argv[0]).
+HERE = os.path.dirname(os.path.abspath(sys.argv[0]))
+STATUS_FILE = "yade_status.json"
+FINAL_FILE = "yade_final.csv"
+KINETIC_FILE = "yade_kinetic.csv"
+CONTACTS_FILE = "yade_contacts.csv"
+LOG_FILE = "yade.log"
+
+
+class RunFailure(Exception):
+    pass
+
+
+def path(name):
+    return os.path.join(HERE, name)
+
+
+_log = None
+
+
+def log(message):
+    global _log
+    if _log is None:
+        _log = open(path(LOG_FILE), "w")
+    print(message, flush=True)
+    _log.write(message + "\n")
+    _log.flush()
+
+
+def write_atomically(name, text):
+    # A unique temporary name: two runs writing into one folder never share it.
+    fd, tmp = tempfile.mkstemp(prefix="." + name + ".", suffix=".tmp", dir=path("."))
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path(name))
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+# Stale outputs of an earlier run must never be mistaken for this run's.
+for _name in (STATUS_FILE, FINAL_FILE, KINETIC_FILE, CONTACTS_FILE):
+    if os.path.exists(path(_name)):
+        os.remove(path(_name))
+
+try:
+    import yade
+    from yade import O, Vector3, utils
+    from yade.wrapper import (Bo1_Box_Aabb, Bo1_Facet_Aabb, Bo1_Sphere_Aabb, Bo1_Wall_Aabb, ForceResetter,
+                              FrictMat, Ig2_Box_Sphere_ScGeom, Ig2_Facet_Sphere_ScGeom, Ig2_Sphere_Sphere_ScGeom,
+                              Ig2_Wall_Sphere_ScGeom, InsertionSortCollider, InteractionLoop,
+                              Ip2_FrictMat_FrictMat_MindlinPhys, Ip2_ViscElMat_ViscElMat_ViscElPhys,
+                              Law2_ScGeom_MindlinPhys_Mindlin, Law2_ScGeom_ViscElPhys_Basic, MatchMaker,
+                              NewtonIntegrator, PyRunner, ViscElMat)
+except ImportError as exc:
+    log("cannot import yade (%s): run with PYTHONPATH=/usr/lib/x86_64-linux-gnu/yade-double/py, "
+        "or with `yade -n -x %s`" % (exc, os.path.basename(sys.argv[0])))
+    write_atomically(STATUS_FILE, json.dumps({"status": "failed", "message": "cannot import yade: %s" % exc}) + "\n")
+    sys.exit(2)
+
+# Scene state filled by the generated calls of scene() below.
+_materials = {}      # label -> material id
+_species = {}        # species -> material id
+_pairs = []          # (material id, material id, restitution, friction)
+_grains = []         # [(packing id, body id)] in packing order
+_walls = []          # body ids of walls, facets and the periodic floor
+_clumps = []         # body ids of the clumps (rigid clusters), one per cluster of the packing
+_cell = None         # (Lx, Ly, Lz) when periodic
+_rolling = None      # dict(krot=, eta=) for the Hertz-Mindlin moment law; None = no rolling term
+_removed = []        # packing ids of grains removed because they left REGION (open floor), in removal order
+_history = []        # [(time, translational kinetic energy)] at t = 0 and at every check
+_loop_seconds = 0.0  # wall time of the time-stepping loop alone
+
+
+def add_material(label, young, poisson, density, species=None):
+    """Elastic constants and density; restitution and friction are per pair (pair())."""
+    if MODEL == "hertz":
+        mat = FrictMat(young=young, poisson=poisson, frictionAngle=0.0, density=density, label=label)
+    else:
+        # ViscElMat with young and en: kn = 1 / (1/(2 E1 r1) + 1/(2 E2 r2)), ks = poisson * kn (here
+        # `poisson` is the ratio ks/kn), normal dashpot from the pair's restitution; en is a placeholder
+        # overridden by the Ip2 functor's MatchMaker.
+        mat = ViscElMat(young=young, poisson=poisson, en=1.0, frictionAngle=0.0, density=density, label=label)
+    mid = O.materials.append(mat)
+    _materials[label] = mid
+    if species is not None:
+        _species[species] = mid
+
+
+def pair(label_a, label_b, restitution, friction):
+    _pairs.append((_materials[label_a], _materials[label_b], restitution, friction))
+
+
+def set_rolling(krot, eta):
+    global _rolling
+    _rolling = dict(krot=krot, eta=eta)
+
+
+def periodic_cell(lx, ly, lz):
+    global _cell
+    O.periodic = True
+    O.cell.setBox(lx, ly, lz)
+    _cell = (lx, ly, lz)
+
+
+def add_grains(csv_name):
+    """The grains of the packing: id,x,y,z,radius,species[,cluster]. Grains of one cluster (cluster > 0) become
+    one clump (O.bodies.appendClumped): a rigid body whose members keep their relative positions; YADE makes
+    no contact between members of one clump. In a periodic cell btr writes a cluster's members unwrapped
+    (together, possibly outside the cell); write_outputs wraps every grain into the cell again. Every grain
+    keeps its packing id (_grains maps it to its body)."""
+    free = []      # (packing id, body)
+    clusters = {}  # cluster -> [(packing id, body)]
+    with open(path(csv_name)) as f:
+        header = f.readline().strip()
+        with_clusters = header == "id,x,y,z,radius,species,cluster"
+        if header != "id,x,y,z,radius,species" and not with_clusters:
+            raise RunFailure("%s: header is %r, expected 'id,x,y,z,radius,species[,cluster]'" % (csv_name, header))
+        expected = header
+        count = 0
+        for n, line in enumerate(f, start=2):
+            if not line.strip():
+                continue
+            try:
+                fields = line.split(",")
+                if len(fields) != (7 if with_clusters else 6):
+                    raise ValueError()
+                gid, x, y, z, r, sp = int(fields[0]), float(fields[1]), float(fields[2]), float(fields[3]), \
+                    float(fields[4]), int(fields[5])
+                cluster = int(fields[6]) if with_clusters else 0
+            except ValueError:
+                raise RunFailure("%s line %d: expected %s, got %r" % (csv_name, n, expected, line.strip()))
+            if gid != count + 1:
+                raise RunFailure("%s line %d: id %d, expected %d (ids are 1..N in order)" % (csv_name, n, gid, count + 1))
+            count += 1
+            if not all(math.isfinite(v) for v in (x, y, z, r)) or r <= 0.0 or cluster < 0:
+                raise RunFailure("%s line %d: non-finite value, radius <= 0 or cluster < 0" % (csv_name, n))
+            if sp not in _species:
+                raise RunFailure("%s line %d: species %d has no material" % (csv_name, n, sp))
+            b = utils.sphere((x, y, z), r, material=_species[sp], color=(0.8, 0.6, 0.2))
+            if cluster == 0:
+                free.append((gid, b))
+            else:
+                clusters.setdefault(cluster, []).append((gid, b))
+    if count == 0:
+        raise RunFailure("%s has no grains" % csv_name)
+    body_of = {}
+    for gid, bid in zip((g for g, _ in free), O.bodies.append([b for _, b in free])):
+        body_of[gid] = bid
+        if DIMENSION == 2:
+            # Disks in the x-z plane: no motion along y, rotation about y only.
+            O.bodies[bid].state.blockedDOFs = "yXZ"
+    for cluster in sorted(clusters):
+        members = clusters[cluster]
+        clump, member_ids = O.bodies.appendClumped([b for _, b in members])
+        _clumps.append(clump)
+        if DIMENSION == 2:
+            O.bodies[clump].state.blockedDOFs = "yXZ"  # the clump is what NewtonIntegrator moves
+        body_of.update(zip((g for g, _ in members), member_ids))
+    _grains.extend((gid, body_of[gid]) for gid in range(1, count + 1))
+
+
+def add_plane(axis, position):
+    """An infinite plane wall. In a periodic cell YADE's collider cannot bound an infinite Wall, so the
+    floor is a thin box whose top face is the plane, wider than the cell (allowBiggerThanPeriod)."""
+    if _cell is not None:
+        if axis != 2:
+            raise RunFailure("a periodic cell has no side walls")
+        t = 0.5 * min(_cell[0], _cell[1])
+        half = (1000.0 * _cell[0], 1000.0 * _cell[1], 0.5 * t)
+        b = utils.box((0.0, 0.0, position - 0.5 * t), half, fixed=True, material=_materials["walls"])
+    else:
+        b = utils.wall(position, axis=axis, material=_materials["walls"])
+    _walls.append(O.bodies.append(b))
+
+
+def add_cylinder(radius, height, segments):
+    """Inner surface of a vertical cylinder about the z axis, from z = 0 to height, as `segments` flat panels
+    (2 facets each) whose faces are tangent to the true cylinder: vertices at radius / cos(pi / segments), so
+    a grain touching the container's cylinder touches a panel without overlap; at a panel edge the gap to
+    the true surface is radius * (1 / cos(pi / segments) - 1)."""
+    rv = radius / math.cos(math.pi / segments)
+    facets = []
+    for k in range(segments):
+        a0 = 2.0 * math.pi * k / segments
+        a1 = 2.0 * math.pi * (k + 1) / segments
+        p0 = (rv * math.cos(a0), rv * math.sin(a0))
+        p1 = (rv * math.cos(a1), rv * math.sin(a1))
+        v00, v10 = (p0[0], p0[1], 0.0), (p1[0], p1[1], 0.0)
+        v01, v11 = (p0[0], p0[1], height), (p1[0], p1[1], height)
+        for tri in ((v00, v10, v11), (v00, v11, v01)):
+            facets.append(utils.facet(tri, material=_materials["walls"], color=(0.5, 0.5, 0.5)))
+    _walls.extend(O.bodies.append(facets))
+
+
+def friction_angles(scale):
+    """The Ip2 functors' friction angles of every material pair, friction scaled by `scale`."""
+    return MatchMaker(matches=[(a, b, math.atan(mu * scale)) for a, b, _, mu in _pairs])
+
+
+_ip2 = None  # the Ip2 functor (its frictAngle is replaced when the compaction restores the friction)
+
+
+def build_engines():
+    global _ip2
+    en = MatchMaker(matches=[(a, b, e) for a, b, e, _ in _pairs])
+    friction_angle = friction_angles(COMPACTION["friction_scales"][0] if COMPACTION else 1.0)
+    if MODEL == "hertz":
+        ip2 = Ip2_FrictMat_FrictMat_MindlinPhys(en=en, frictAngle=friction_angle)
+        law = Law2_ScGeom_MindlinPhys_Mindlin()
+        if _rolling is not None:
+            ip2.krot = _rolling["krot"]
+            ip2.ktwist = 0.0
+            ip2.eta = _rolling["eta"]
+            law.includeMoment = True
+    else:
+        ip2 = Ip2_ViscElMat_ViscElMat_ViscElPhys(en=en, frictAngle=friction_angle)
+        law = Law2_ScGeom_ViscElPhys_Basic()
+    if _rolling is not None and COMPACTION:
+        raise RunFailure("the compaction to a target packing fraction does not scale YADE's rolling friction")
+    _ip2 = ip2
+    collider = InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Wall_Aabb(), Bo1_Facet_Aabb(), Bo1_Box_Aabb()],
+                                     verletDist=VERLET_DIST, label="collider")
+    if _cell is not None:
+        # The floor box is wider than the cell: sweep along z, where it is thin.
+        collider.allowBiggerThanPeriod = True
+        collider.sortAxis = 2
+    O.engines = [
+        ForceResetter(),
+        collider,
+        InteractionLoop([Ig2_Sphere_Sphere_ScGeom(), Ig2_Wall_Sphere_ScGeom(), Ig2_Facet_Sphere_ScGeom(),
+                         Ig2_Box_Sphere_ScGeom()], [ip2], [law]),
+        # DAMPING is YADE's local non-viscous damping, off (0) unless the scene or `btr relax --damping` asks
+        # for it: then, besides the contact dashpots and friction, each force component is reduced by
+        # DAMPING |F| against the velocity. kinSplit + O.trackEnergy give the translational kinetic energy.
+        NewtonIntegrator(gravity=(0.0, 0.0, -GRAVITY), damping=COMPACTION["damping"] if COMPACTION else DAMPING,
+                         kinSplit=True, label="newton"),
+    ]
+    O.trackEnergy = True
+
+
+def translational_kinetic_energy():
+    return O.energy["kinTrans"]
+
+
+def wrap(x, length):
+    return x - length * math.floor(x / length + 0.5)
+
+
+def write_history():
+    lines = ["time,kinetic_energy"] + ["%.17g,%.17g" % h for h in _history]
+    write_atomically(KINETIC_FILE, "\n".join(lines) + "\n")
+
+
+def write_outputs():
+    write_history()
+    lines = ["id,x,y,z,vx,vy,vz"]
+    for gid, bid in _grains:
+        b = O.bodies[bid]
+        if b is None:  # removed (open floor)
+            continue
+        p, v = b.state.pos, b.state.vel
+        x, y = p[0], p[1]
+        if DIMENSION == 2 and b.isClumpMember and abs(y) < 1e-9 * b.shape.radius:
+            # A clump member's position is its clump's rotated by a quaternion: round-off off the x-z
+            # plane (~1e-16 r; the clump's DOFs out of the plane are blocked). A larger y is reported.
+            y = 0.0
+        if _cell is not None:
+            x = wrap(x, _cell[0])
+            if DIMENSION == 3:
+                y = wrap(y, _cell[1])
+        lines.append("%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g" % (gid, x, y, p[2], v[0], v[1], v[2]))
+    write_atomically(FINAL_FILE, "\n".join(lines) + "\n")
+    packing_id = {bid: gid for gid, bid in _grains}
+    lines = ["i,j,fn,overlap"]
+    # (removed grains are no longer bodies: their ids never appear here)
+    for i in O.interactions:
+        if not i.isReal or i.geom.penetrationDepth <= 0.0:
+            continue
+        a, b = packing_id.get(i.id1, 0), packing_id.get(i.id2, 0)
+        if a == 0 or (b != 0 and b < a):
+            a, b = b, a
+        lines.append("%d,%d,%.17g,%.17g" % (a, b, i.phys.normalForce.norm(), i.geom.penetrationDepth))
+    write_atomically(CONTACTS_FILE, "\n".join(lines) + "\n")
+
+
+def write_status(status, reason, message, wall):
+    steps = O.iter
+    write_atomically(STATUS_FILE, json.dumps({
+        "status": status, "stop_reason": reason, "message": message,
+        "time": O.time, "steps": steps, "timestep": O.dt, "wall_seconds": wall,
+        "steps_per_second": steps / wall if wall > 0 else 0.0,
+        "loop_seconds": _loop_seconds,
+        "loop_steps_per_second": steps / _loop_seconds if _loop_seconds > 0 else 0.0,
+        "grains": len(_grains), "clumps": len(_clumps), "bodies": len(O.bodies), "threads": O.numThreads,
+        "yade_version": getattr(yade.config, "version", "unknown"), "model": MODEL,
+        "stop_value": _rule.value if _rule is not None else None,
+        "final_unbalanced_force": _final_unbalanced,
+        "removed": _removed,
+        "compaction": _rule.compaction.outcome if _rule is not None else None,
+    }, indent=1) + "\n")
+
+
+def unbalanced_force():
+    """YADE's utils.unbalancedForce(): mean over grains of |contact forces + m g| / mean over contacts of
+    |normal + shear force|; a large number while no contact carries force yet."""
+    try:
+        return utils.unbalancedForce()
+    except (ZeroDivisionError, ArithmeticError):
+        return float("inf")
+
+
+def present_grains():
+    """(packing id, body) of every grain still in the simulation (an open floor erases the ones that leave)."""
+    for gid, bid in _grains:
+        b = O.bodies[bid]
+        if b is not None:
+            yield gid, b
+
+
+def remove_escaped():
+    """Open floor: erases every grain whose centre left REGION (x0, x1, y0, y1); returns how many."""
+    if REGION is None:
+        return 0
+    x0, x1, y0, y1 = REGION
+    gone = [(gid, b.id) for gid, b in present_grains()
+            if not (x0 <= b.state.pos[0] <= x1) or (DIMENSION == 3 and not (y0 <= b.state.pos[1] <= y1))]
+    for gid, bid in gone:
+        O.bodies.erase(bid)
+        _removed.append(gid)
+    return len(gone)
+
+
+def grain_positions():
+    return [O.bodies[bid].state.pos if O.bodies[bid] is not None else None for _, bid in _grains]
+
+
+def grain_part_between(z, r, a, b):
+    """Volume (area in 2D) of a sphere (disk) of centre height z and radius r between the planes a and b."""
+    a, b = max(a, z - r), min(b, z + r)
+    if b <= a:
+        return 0.0
+    if DIMENSION == 3:
+        return math.pi * (r * r * (b - a) - ((b - z) ** 3 - (a - z) ** 3) / 3.0)
+    ua, ub = (min(max((u - z) / r, -1.0), 1.0) for u in (a, b))
+    return r * r * (ub * math.sqrt(1.0 - ub * ub) + math.asin(ub) - ua * math.sqrt(1.0 - ua * ua) - math.asin(ua))
+
+
+def bulk_packing_fraction():
+    """Solid fraction (area fraction in 2D) of COMPACTION's window: each grain's part between its planes, of the
+    grains whose centre lies in its lateral bounds (the LIGGGHTS script's variable btr_phi)."""
+    c = COMPACTION
+    lo, hi = c["window_lo"], c["window_hi"]
+    solid = 0.0
+    for _, b in present_grains():
+        p = b.state.pos
+        if not c["slab"] and not (lo[0] <= p[0] <= hi[0] and (DIMENSION == 2 or lo[1] <= p[1] <= hi[1])):
+            continue
+        solid += grain_part_between(p[2], b.shape.radius, lo[2], hi[2])
+    return solid / c["window_measure"]
+
+
+class Compaction:
+    """The compaction to COMPACTION["target"] (btr relax --target-phi; the LIGGGHTS script's, step for step):
+    friction scaled by friction_scales[k], NewtonIntegrator damping COMPACTION["damping"], the bulk packing
+    fraction checked at every sample; at the target, or when the last scale has brought the bed to rest (kinetic
+    energy and its mean over STEPS_PER_CHECK steps below COMPACTION["rest_kinetic"], after the arming time of the
+    scale) or used max_time, the friction of every pair and contact is restored, every grain stopped, DAMPING
+    set, and the stop rule armed anew."""
+
+    def __init__(self, rule):
+        self.rule = rule
+        self.active = bool(COMPACTION)
+        self.k = 0
+        self.samples = 0
+        self.recent = []
+        self.rest_from = COMPACTION["arming"] if COMPACTION else 0.0
+        self.outcome = None
+
+    def step(self, t, e):
+        """Called at every sample while active; returns True while the compaction goes on."""
+        c = COMPACTION
+        phi = bulk_packing_fraction()
+        if self.k == 0 and self.samples == 0:
+            log("compaction: first check at t = %.6g s, phi %.6g" % (t, phi))
+        self.samples += 1
+        self.recent = (self.recent + [e])[-(STEPS_PER_CHECK // AVERAGE_EVERY):]
+        if phi >= c["target"]:
+            self.finish(True, t, phi)
+            return False
+        at_rest = t >= self.rest_from and e < c["rest_kinetic"] and \
+            sum(self.recent) / len(self.recent) < c["rest_kinetic"]
+        if at_rest or self.samples >= c["max_samples_per_scale"]:
+            log("compaction: friction x %g at rest below the target at t = %.6g s, phi %.6g" % (
+                c["friction_scales"][self.k], t, phi))
+            if self.k + 1 == len(c["friction_scales"]):
+                self.finish(False, t, phi)
+                return False
+            self.k += 1
+            self.samples = 0
+            self.recent = []
+            self.rest_from = t + c["arming"]
+            self.set_friction(c["friction_scales"][self.k])
+        return True
+
+    def set_friction(self, scale):
+        _ip2.frictAngle = friction_angles(scale)
+        tangent = {}
+        for a, b, _, mu in _pairs:
+            tangent[(a, b)] = tangent[(b, a)] = mu * scale
+        for i in O.interactions:
+            if i.isReal:
+                i.phys.tangensOfFrictionAngle = tangent[(O.bodies[i.id1].material.id, O.bodies[i.id2].material.id)]
+
+    def finish(self, reached, t, phi):
+        c = COMPACTION
+        scale = c["friction_scales"][self.k]
+        log("compaction %s: friction x %g, t = %.6g s, phi %.6g; friction restored, grains stopped, damping %g" % (
+            "reached the target" if reached else "did NOT reach the target", scale, t, phi, DAMPING))
+        self.set_friction(1.0)
+        for b in O.bodies:
+            if b is not None and b.dynamic:
+                b.state.vel = Vector3(0.0, 0.0, 0.0)
+                b.state.angVel = Vector3(0.0, 0.0, 0.0)
+        next(e for e in O.engines if isinstance(e, NewtonIntegrator)).damping = DAMPING
+        O.dt = TIMESTEP
+        self.outcome = {"reached": reached, "friction_scale": scale, "time": t, "packing_fraction": phi}
+        self.active = False
+        self.rule.rearm(t)
+
+
+class StopRule:
+    """The stop rules of the LIGGGHTS script, step for step, run inside YADE's loop by a PyRunner every
+    AVERAGE_EVERY steps (so YADE runs whole chunks of steps without returning to Python): the translational
+    kinetic energy E is sampled after every AVERAGE_EVERY-th step; every STEPS_PER_CHECK steps comes a check.
+    STOP_RULE "kinetic-energy": E and the mean of the last STEPS_PER_CHECK / AVERAGE_EVERY samples are both
+    below KINETIC_THRESHOLD, once armed (the mean was above it once, or t >= ARMING_TIME);
+    "unbalanced-force": utils.unbalancedForce() < UNBALANCED_THRESHOLD, once t >= ARMING_TIME;
+    "displacement": the largest grain displacement since the previous check < DISPLACEMENT_THRESHOLD [m],
+    once t >= ARMING_TIME. Otherwise the run ends after MAX_CHECKS checks (max-time). A sample above
+    KINETIC_BOUND is a blow-up. With an open floor (REGION), grains whose centre left the region are erased
+    at every check (and counted).
+    The PyRunner runs during a step, after NewtonIntegrator: that step ends at O.iter + 1, O.time + O.dt.
+    It never raises (an exception would stop YADE with a bare "PyRunner error"): it records the reason or
+    the failure and pauses the run."""
+
+    def __init__(self):
+        self.samples = STEPS_PER_CHECK // AVERAGE_EVERY
+        self.total = 0.0
+        self.count = 0
+        self.checks = 0
+        self.armed = False
+        self.bodies = len(O.bodies)
+        self.reason = None
+        self.value = None
+        self.failure = None
+        self.next_report = time.time() + 10.0
+        self.reference = grain_positions() if STOP_RULE == "displacement" else None
+        self.arming_time = ARMING_TIME
+        self.compaction = Compaction(self)
+
+    def rearm(self, t):
+        """After the compaction: the stop rule starts again, armed after COMPACTION["arming"]."""
+        self.total, self.count, self.checks, self.armed = 0.0, 0, 0, False
+        self.arming_time = t + COMPACTION["arming"]
+        if STOP_RULE == "displacement":
+            self.reference = grain_positions()
+
+    def sample(self):
+        try:
+            self._sample()
+        except Exception as exc:
+            self.failure = exc if isinstance(exc, RunFailure) else RunFailure(
+                "%s: %s\n%s" % (type(exc).__name__, exc, traceback.format_exc()))
+            O.pause()
+
+    def _largest_displacement(self):
+        now = grain_positions()
+        largest = 0.0
+        for a, b in zip(self.reference, now):
+            if a is not None and b is not None:
+                largest = max(largest, (b - a).norm())
+        self.reference = now
+        return largest
+
+    def _sample(self):
+        e = translational_kinetic_energy()
+        t, step = O.time + O.dt, O.iter + 1  # at the end of this step
+        # Bound and NaN at every sample, not only at checks: after a blow-up YADE's periodic collider can
+        # spin for hours on grains flung across many periods before the next check comes.
+        if not math.isfinite(e) or e > KINETIC_BOUND:
+            _history.append((t, e))
+            if not math.isfinite(e):
+                raise RunFailure("kinetic energy is %r at t = %.6g s (step %d)" % (e, t, step))
+            raise RunFailure("blow-up: kinetic energy %.6g J above the bound %.6g J (twice the energy the packing "
+                             "holds) at t = %.6g s (step %d)" % (e, KINETIC_BOUND, t, step))
+        if self.compaction.active:
+            if (self.compaction.samples + 1) % (STEPS_PER_CHECK // AVERAGE_EVERY) == 0:
+                _history.append((t, e))
+            self.compaction.step(t, e)
+            return
+        self.total += e
+        self.count += 1
+        if self.count < self.samples:
+            return
+        mean = self.total / self.samples
+        self.total, self.count = 0.0, 0
+        self.checks += 1
+        _history.append((t, e))
+        if not math.isfinite(mean):
+            raise RunFailure("mean kinetic energy is %r at t = %.6g s (step %d)" % (mean, t, step))
+        removed = remove_escaped()
+        if removed:
+            log("t = %.6g s: %d grain(s) left the open floor's region and were removed (%d in all)" % (
+                t, removed, len(_removed)))
+        # len(O.bodies) keeps counting erased slots: count the bodies themselves once grains were removed.
+        present = len(O.bodies) if not _removed else sum(1 for b in O.bodies if b is not None)
+        if present != self.bodies - len(_removed):
+            raise RunFailure("bodies were lost: %d left of %d (%d removed)" % (present, self.bodies, len(_removed)))
+        if mean >= KINETIC_THRESHOLD:
+            self.armed = True
+        ready = self.armed or t >= self.arming_time if STOP_RULE == "kinetic-energy" else t >= self.arming_time
+        if STOP_RULE == "kinetic-energy":
+            self.value = e
+            met = mean < KINETIC_THRESHOLD and e < KINETIC_THRESHOLD
+        elif STOP_RULE == "unbalanced-force":
+            self.value = unbalanced_force()
+            met = self.value < UNBALANCED_THRESHOLD
+        else:
+            self.value = self._largest_displacement()
+            met = self.value < DISPLACEMENT_THRESHOLD
+        if ready and met:
+            self.reason = STOP_RULE
+        elif self.checks >= MAX_CHECKS:
+            self.reason = "max-time"
+        if self.reason is not None:
+            O.pause()  # YADE stops once this step is complete
+            return
+        if time.time() >= self.next_report:
+            self.next_report = time.time() + 10.0
+            log("t = %.6g s, step %d, kinetic energy %.6g J (%.3g x threshold), %s %.6g" % (
+                t, step, e, e / KINETIC_THRESHOLD, STOP_RULE, self.value))
+
+
+_rule = None
+_final_unbalanced = None
+
+
+def relax():
+    """Runs the relaxation in one O.run() call (the StopRule's PyRunner pauses it) and returns the stop
+    reason; the wall time of the loop alone is in _loop_seconds."""
+    global _rule, _loop_seconds
+    build_engines()
+    O.dt = COMPACTION["timestep"] if COMPACTION else TIMESTEP
+    log("YADE %s, %d threads, model %s, %d grains (%d clumps), %d wall bodies" % (
+        getattr(yade.config, "version", "?"), O.numThreads, MODEL, len(_grains), len(_clumps), len(_walls)))
+    log("time step %.6g s: %s (YADE's P-wave estimate: %.6g s)" % (TIMESTEP, TIMESTEP_RULE, utils.PWaveTimeStep()))
+    log("stop rule %s (kinetic %.6g J, unbalanced force %.6g, displacement %.6g m) every %d steps, from t >= %.6g s; "
+        "at most %d checks; blow-up above %.6g J; damping %.6g" % (
+            STOP_RULE, KINETIC_THRESHOLD, UNBALANCED_THRESHOLD, DISPLACEMENT_THRESHOLD, STEPS_PER_CHECK, ARMING_TIME,
+            MAX_CHECKS, KINETIC_BOUND, DAMPING))
+    if REGION is not None:
+        log("open floor: grains leaving x in [%.6g, %.6g], y in [%.6g, %.6g] m are removed" % REGION)
+    _history.append((0.0, sum(0.5 * O.bodies[b].state.mass * O.bodies[b].state.vel.squaredNorm() for _, b in _grains)))
+    _rule = StopRule()
+    # PyRunner commands run in __main__, which is not this script's namespace under the `yade` launcher.
+    import __main__
+    __main__._btr_stop_rule = _rule
+    # First run after AVERAGE_EVERY steps (at O.iter = AVERAGE_EVERY - 1), then every AVERAGE_EVERY steps;
+    # nDone = 1 skips PeriodicEngine's bookkeeping first call, which would reset iterLast to 0.
+    O.engines = O.engines + [PyRunner(command="_btr_stop_rule.sample()", iterPeriod=AVERAGE_EVERY,
+                                      iterLast=O.iter - 1, nDone=1, label="stop_rule")]
+    t0 = time.time()
+    steps = MAX_CHECKS * STEPS_PER_CHECK
+    if COMPACTION:  # each friction scale of the compaction may run up to max_time before the settle's max_time
+        steps += len(COMPACTION["friction_scales"]) * COMPACTION["max_samples_per_scale"] * AVERAGE_EVERY
+    O.run(steps, True)  # returns when the rule pauses YADE (or at the last step)
+    _loop_seconds = time.time() - t0
+    if _rule.failure is not None:
+        raise _rule.failure
+    if _rule.reason is None:
+        raise RunFailure("the run ended after %d steps without a stop-rule decision" % O.iter)
+    return _rule.reason
+
+
+def main():
+    global _final_unbalanced
+    t0 = time.time()
+    try:
+        scene()
+        reason = relax()
+        remove_escaped()
+        _final_unbalanced = unbalanced_force()
+        if not math.isfinite(_final_unbalanced):
+            _final_unbalanced = None
+        for gid, bid in _grains:
+            if O.bodies[bid] is None:
+                continue
+            if O.bodies[bid].state.pos[2] < 0.0:
+                raise RunFailure("grain %d fell through the floor (z = %.6g m)" % (gid, O.bodies[bid].state.pos[2]))
+        write_outputs()
+        wall = time.time() - t0
+        log("unbalanced force at the end: %s; %d grain(s) removed" % (_final_unbalanced, len(_removed)))
+        log("stopped by %s at t = %.6g s after %d steps, %.3g s wall time, %.3g s of them stepping (%.4g steps/s)" % (
+            reason, O.time, O.iter, wall, _loop_seconds, O.iter / _loop_seconds if _loop_seconds > 0 else 0.0))
+        write_status("ok", reason, "", wall)
+        return 0
+    except Exception as exc:
+        message = str(exc) if isinstance(exc, RunFailure) else "%s: %s" % (type(exc).__name__, exc)
+        log(traceback.format_exc())
+        log("FAILED: " + message)  # last, so that the tail of the log names the failure
+        if _history:
+            write_history()
+        write_status("failed", "", message, time.time() - t0)
+        return 1
+)yade_py";
+}
+
+}  // namespace btr

@@ -1,0 +1,41 @@
+"""Neighbour search on packings (periodic sides wrap): the pairs within a distance, for the overlap and
+support checks of the workflows. The coordination number is not computed here: it is a measure, and
+`btr measure` (btr/measures/metrics.cpp) is its one definition."""
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .geometry import Container
+
+
+def tree(coords: np.ndarray, container: Container) -> cKDTree:
+    """A k-d tree of coords() positions, periodic where the container is."""
+    data = container.wrap(coords)
+    periods = container.periods()
+    if np.any(periods > 0):
+        return cKDTree(data, boxsize=periods)
+    return cKDTree(data)
+
+
+def touching_pairs(pos: np.ndarray, r: np.ndarray, container: Container, tol: float = 0.0):
+    """Pairs (i, j), i < j, with centre distance < (r_i + r_j)(1 + tol), and those distances."""
+    coords = container.coords(pos)
+    if len(coords) < 2:
+        return np.zeros((0, 2), dtype=int), np.zeros(0)
+    t = tree(coords, container)
+    r_max = float(np.max(r))
+    if r_max / float(np.min(r)) < 3.0:
+        pairs = t.query_pairs(2.0 * r_max * (1.0 + tol), output_type="ndarray")
+    else:  # wide size distributions: search each grain's own reach, not the largest one
+        lists = t.query_ball_point(container.wrap(coords), (r + r_max) * (1.0 + tol), return_sorted=False)
+        ii = np.repeat(np.arange(len(lists)), [len(x) for x in lists])
+        jj = np.concatenate([np.asarray(x, dtype=int) for x in lists]) if len(lists) else np.zeros(0, int)
+        keep = jj > ii
+        pairs = np.column_stack([ii[keep], jj[keep]])
+    if len(pairs) == 0:
+        return np.zeros((0, 2), dtype=int), np.zeros(0)
+    delta = container.minimum_image(coords[pairs[:, 1]] - coords[pairs[:, 0]])
+    dist = np.linalg.norm(delta, axis=1)
+    keep = dist < (r[pairs[:, 0]] + r[pairs[:, 1]]) * (1.0 + tol)
+    return pairs[keep], dist[keep]
