@@ -5,7 +5,7 @@
 
 namespace btr_app {
 
-// Exit codes shared by every subcommand (README, "Exit codes").
+// Exit codes shared by every subcommand (docs/faults.md, "Exit codes").
 enum ExitCode {
   kSuccess = 0,
   kBadInput = 2,

@@ -4,7 +4,7 @@ or exit 2 and a message naming the file (and, for a scene value, the field). Any
 a signal, std::bad_alloc, a hang (past the time limit), exit 3 or 4 on a bad value, a refusal that names
 neither the file nor the field.
 
-    /usr/bin/python3 scripts/fuzz_inputs.py --cases 3000 -o out/fuzz      # the long run (README figures)
+    /usr/bin/python3 scripts/fuzz_inputs.py --cases 3000 -o out/fuzz      # the long run (docs/faults.md, "Fuzzing")
 
 tests/workflows/test_fuzz.py runs a few hundred cases of the same generator in the test suite.
 

@@ -1,5 +1,5 @@
 #pragma once
-// The structural measures of a packing (DESIGN.md section 5), the one place each is defined: the bulk
+// The structural measures of a packing (docs/design.md section 5), the one place each is defined: the bulk
 // window, packing fraction, coordination and its histogram, g(r), the free-surface profile and the heap
 // angle, segregation indices, heights, and the rotating drum's per-step measures. `btr deposit`, `btr
 // relax`, `btr measure` (which the Python workflows call) and `btr drum` all take their numbers from

@@ -1,4 +1,4 @@
-// The placement of one grain is a sequence of events (DESIGN.md section 3). Its state is the centre
+// The placement of one grain is a sequence of events (docs/design.md section 3). Its state is the centre
 // x and the active contacts; each step asks where gravity pushes it (descend), and moves it along
 // the path those contacts allow (a vertical fall, a circular arc, or the curve along a cylinder
 // wall) up to the first event: a new contact, a support lifting off, or the lowest point.
@@ -176,7 +176,7 @@ void Deposition::Impl::back_inside_walls(std::int64_t id, Vec3& x, double r) con
 }
 
 // ---------------------------------------------------------------------------------------------
-// Fall: straight down to the highest contact below (DESIGN.md: z_j + sqrt((r + r_j)^2 - h^2)).
+// Fall: straight down to the highest contact below (docs/design.md section 3: z_j + sqrt((r + r_j)^2 - h^2)).
 void Deposition::Impl::fall(Vec3& x, double r, Contacts& active, const std::vector<Obstacle>& walls) {
   const double tol = 1e-12 * r;
   Event ev{x.z() - r, {}, -1};  // floor at z = r: t measures the drop

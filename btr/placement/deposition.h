@@ -1,6 +1,6 @@
 #pragma once
 // The BTR placement engine: grains are dropped one at a time and each falls, rolls over the grains
-// already fixed and stops where gravity is balanced by its supports (DESIGN.md section 3).
+// already fixed and stops where gravity is balanced by its supports (docs/design.md section 3).
 #include <cstdint>
 #include <limits>
 #include <memory>

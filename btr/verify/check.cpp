@@ -1,6 +1,6 @@
 // Self-check of a packing. Deliberately shares no code with the placement engine: its own
 // neighbour grid, its own wall geometry, and a support test that asks only whether gravity can be
-// balanced by non-negative normal forces (DESIGN.md section 3), not how the grain got there.
+// balanced by non-negative normal forces (docs/design.md section 3), not how the grain got there.
 #include "btr/verify/check.h"
 
 #include <algorithm>

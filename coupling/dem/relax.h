@@ -1,5 +1,5 @@
 #pragma once
-// DEM relaxation of a packing in LIGGGHTS or YADE (DESIGN.md section 4): write the inputs, run the
+// DEM relaxation of a packing in LIGGGHTS or YADE (docs/design.md section 4): write the inputs, run the
 // engine, detect failure, read the relaxed packing back.
 #include <limits>
 #include <optional>

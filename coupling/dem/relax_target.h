@@ -9,7 +9,7 @@
 // collapse under gravity that overshoots any target if it runs to rest without friction (bed3d, 10 000
 // grains: 0.645 against the pour's 0.626), and each run to rest costs a relaxation. Watched in the run,
 // the collapse is stopped at the target, and how fast it was allowed to go (compaction_damping) decides how
-// many contacts the settled bed keeps (README, "Target packing fraction").
+// many contacts the settled bed keeps (docs/guide/relax.md, "Target packing fraction").
 #include <string>
 #include <vector>
 

@@ -1,5 +1,5 @@
 #pragma once
-// Stable time steps for the DEM relaxation (DESIGN.md section 4), shared by both engines.
+// Stable time steps for the DEM relaxation (docs/design.md section 4), shared by both engines.
 //  Hertz: Rayleigh time  T_R = pi R sqrt(rho / G) / (0.1631 nu + 0.8766), G = Y / (2 (1 + nu)),
 //         of the grain that gives the smallest T_R (the smallest grain of its species).
 //  Hooke: contact time   t_c = pi / sqrt(k / m_eff - (gamma / 2)^2), gamma = gamma_n / m_eff, with

@@ -1,5 +1,5 @@
 #pragma once
-// The packing interchange format (DESIGN.md section 2): NAME.csv + NAME.json + NAME.vtp.
+// The packing interchange format (docs/design.md section 2): NAME.csv + NAME.json + NAME.vtp.
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>

@@ -74,7 +74,7 @@ def test_compare_refuses_different_ids(tmp_path, pair):
     pre, post, _, _ = pair
     lines = open(post).read().splitlines()
     open(post, "w").write("\n".join(lines[:-1]) + "\n")
-    # Edited on purpose: its JSON's record of the CSV goes, as the README says, or the record refuses it first.
+    # Edited on purpose: its JSON's record of the CSV goes, as docs/faults.md says ("A packing is whole or refused"), or the record refuses it first.
     meta_path = Path(post).with_suffix(".json")
     meta = json.loads(meta_path.read_text())
     meta.pop("files", None)

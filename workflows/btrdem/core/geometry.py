@@ -1,4 +1,4 @@
-"""The container a packing lives in, as every metric sees it (DESIGN.md section 1, btr/model/container.h).
+"""The container a packing lives in, as every metric sees it (docs/design.md section 1, btr/model/container.h).
 
 Floor z = 0; lateral geometry centred on the z axis:
   open       floor only

@@ -1,4 +1,4 @@
-"""Packing files (DESIGN.md section 2): NAME.csv (id,x,y,z,radius,species) + NAME.json + NAME.vtp,
+"""Packing files (docs/design.md section 2): NAME.csv (id,x,y,z,radius,species) + NAME.json + NAME.vtp,
 and scene TOML files. Every write goes to a temporary name and is renamed into place."""
 from __future__ import annotations
 

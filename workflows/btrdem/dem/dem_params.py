@@ -30,7 +30,7 @@ def species_table(scene: dict) -> dict:
 
 
 def rayleigh_time(radius: float, density: float, young: float, poisson: float) -> float:
-    """pi R sqrt(rho / G) / (0.1631 nu + 0.8766), G = E / (2 (1 + nu)) (DESIGN.md section 4)."""
+    """pi R sqrt(rho / G) / (0.1631 nu + 0.8766), G = E / (2 (1 + nu)) (docs/design.md section 4)."""
     shear = young / (2.0 * (1.0 + poisson))
     return math.pi * radius * math.sqrt(density / shear) / (0.1631 * poisson + 0.8766)
 

@@ -1,5 +1,5 @@
 """`error-vs-runtime SCENE`: error against run time of BTR, BTR + relaxation and DEM pours
-(DESIGN.md section 6).
+(docs/design.md section 6).
 
 Reference: LIGGGHTS pours of the BTR packing's grains with `ref_seeds` seeds (the pour's lattice
 jitter); their mean is the reference value of each structural measure and their seed-to-seed
@@ -52,7 +52,7 @@ METHODS = ("relax", "damped", "target-phi", "target-phi-unbalanced", "shake", "p
 # The measures the verdict requires (the others are reported beside them).
 CORE_MEASURES = ("packing_fraction", "coordination", "rdf")
 # The pre-load's fit leaves neighbours up to ~0.07 r beyond their intended overlap at 10 000 grains
-# (README, pre-loaded start): the pre-loaded damped method allows that much.
+# (docs/guide/relax.md, "Pre-loaded start"): the pre-loaded damped method allows that much.
 PRELOAD_MAX_OVERLAP = 0.1
 
 MEASURES = {"packing_fraction": "packing fraction", "coordination": "mean coordination", "rdf": "g(r) RMS",

@@ -419,7 +419,7 @@ def dem_scatter(outdir, seeds, widths, reference_csv=None, d_mm: float = 1.0, pa
     other seeds (the seed moves the pour's initial lattice and jitter), beside the seed-1 rows of
     reference_csv (a hele_shaw.csv). Each pour is a case (RunRecord.case: a failure is a row with its reason);
     a case whose dem/poured.csv exists is reused. dem_scatter.csv and dem_scatter.md in outdir are rewritten
-    after every pour. Usage (README, "Hele-Shaw heaps"):
+    after every pour. Usage (docs/studies.md, "Hele-Shaw heaps"):
       cd workflows && /usr/bin/python3 -c "from btrdem.studies.hele_shaw import dem_scatter; dem_scatter('../out/hand',
           [2, 3], [1.5, 3, 5, 7, 10, 15, 20, 30], '../docs/hele_shaw/hele_shaw.csv')"
     """
