@@ -572,9 +572,9 @@ RadialDistribution radial_distribution(const Grains& grains, int dimension, cons
   std::int64_t centres = 0;
   for (std::size_t i = 0; i < grains.size(); ++i) centres += centre[i] = in_bulk_window(bulk, grains[i].x, dimension);
   // Cells a third of the reach wide (at least a largest diameter): fewer needless pairs than reach-wide cells.
-  const int cells_per_reach = std::clamp(static_cast<int>(reach / (2.0 * max_radius(grains))), 1, 3);
+  constexpr int kCellsPerReach = 3;
   const double reach2 = reach * reach;
-  const PairSearch pairs(grains, dimension, container, reach, cells_per_reach);
+  const PairSearch pairs(grains, dimension, container, reach, kCellsPerReach);
   pairs.for_each_pair([&](std::size_t i, std::size_t j, const Vec3& d) {
     const double r2 = d.squaredNorm();
     if (r2 >= reach2) return;

@@ -5,8 +5,9 @@
 // (neighbour_grid.h) does another job: grains inserted one by one, read by column and by box, every
 // periodic image apart. The self-check keeps its own search on purpose (btr/verify links no placement).
 //
-// Cells are cutoff / cells_per_cutoff wide (a periodic axis holds its period in whole cells, at least that
-// wide); on an axis that does not wrap, cell k covers [k w, (k + 1) w). A cell keeps its grains in index
+// Cells are cutoff / m wide, m = cells_per_cutoff or fewer, so that no cell is narrower than the largest
+// grain's diameter (a periodic axis holds its period in whole cells, at least that wide); on an axis that
+// does not wrap, cell k covers [k w, (k + 1) w). A cell keeps its grains in index
 // order, and the cells a query reads are visited z, then y, then x, each from below: the order is a
 // function of the positions, the same in every run.
 #include <cstdint>
@@ -20,7 +21,7 @@ namespace btr {
 class PairSearch {
  public:
   // dimension 2: disks in the x-z plane; cells_per_cutoff >= 1 (narrower cells read less needless volume
-  // for a cut-off of several diameters).
+  // for a cut-off of several diameters; at most 8).
   PairSearch(const Grains& grains, int dimension, const Container& container, double cutoff,
              int cells_per_cutoff = 1);
 
