@@ -1,5 +1,5 @@
 #pragma once
-// All pairs of grains closer than a cut-off in a fixed packing, periodic axes at the nearest image (the
+// All pairs of grains within a cut-off of each other in a fixed packing, periodic axes at the nearest image (the
 // container's wraps_x / wraps_y). The one pair search of the measures (coordination, g(r)), of the
 // overlaps handed to DEM and of the cutting of cluster deposits. The placement's NeighbourGrid
 // (neighbour_grid.h) does another job: grains inserted one by one, read by column and by box, every
@@ -7,9 +7,10 @@
 //
 // Cells are cutoff / m wide, m = cells_per_cutoff or fewer, so that no cell is narrower than the largest
 // grain's diameter (a periodic axis holds its period in whole cells, at least that wide); on an axis that
-// does not wrap, cell k covers [k w, (k + 1) w). A cell keeps its grains in index
-// order, and the cells a query reads are visited z, then y, then x, each from below: the order is a
-// function of the positions, the same in every run.
+// does not wrap, cell k covers [k w, (k + 1) w). A cell keeps its grains in index order, and the cells a
+// query reads are visited z, then y, then x, each from below: the order is a function of the positions,
+// the same in every run.
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
