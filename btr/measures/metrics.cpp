@@ -571,7 +571,7 @@ RadialDistribution radial_distribution(const Grains& grains, int dimension, cons
   std::vector<char> centre(grains.size());
   std::int64_t centres = 0;
   for (std::size_t i = 0; i < grains.size(); ++i) centres += centre[i] = in_bulk_window(bulk, grains[i].x, dimension);
-  // Cells a third of the reach wide (at least a largest diameter): fewer needless pairs than reach-wide cells.
+  // Cells up to a third of the reach wide (never narrower than a largest diameter): fewer needless pairs.
   constexpr int kCellsPerReach = 3;
   const double reach2 = reach * reach;
   const PairSearch pairs(grains, dimension, container, reach, kCellsPerReach);
