@@ -12,6 +12,7 @@
 #include "btr/model/number_text.h"
 #include "btr/placement/deposition.h"
 #include "btr/placement/drops.h"
+#include "btr/placement/pair_search.h"
 #include "btr/scene/cluster_list.h"
 #include "btr/scene/scene_toml.h"
 
@@ -45,28 +46,26 @@ double mean_diameter(const Grains& grains) {
 std::vector<std::vector<std::size_t>> touching_clusters_in_blocks(const Grains& grains, int dimension,
                                                                   const Container& c, double side,
                                                                   double contact_tol) {
-  std::map<std::array<long, 3>, std::vector<std::size_t>> blocks;
+  std::vector<std::array<long, 3>> block(grains.size());
   for (std::size_t i = 0; i < grains.size(); ++i) {
     const Vec3& x = grains[i].x;
-    const long bx = static_cast<long>(std::floor((x.x() + 0.5 * c.size_x) / side));
-    const long by = dimension == 3 ? static_cast<long>(std::floor((x.y() + 0.5 * c.size_y) / side)) : 0;
-    const long bz = static_cast<long>(std::floor(x.z() / side));
-    blocks[{bx, by, bz}].push_back(i);
+    block[i] = {static_cast<long>(std::floor((x.x() + 0.5 * c.size_x) / side)),
+                dimension == 3 ? static_cast<long>(std::floor((x.y() + 0.5 * c.size_y) / side)) : 0,
+                static_cast<long>(std::floor(x.z() / side))};
   }
   double r_max = 0.0;
   for (const Grain& g : grains) r_max = std::max(r_max, g.r);
   UnionFind uf(grains.size());
-  for (auto& [key, members] : blocks) {
-    std::sort(members.begin(), members.end(),
-              [&](std::size_t a, std::size_t b) { return grains[a].x.x() < grains[b].x.x(); });
-    for (std::size_t a = 0; a < members.size(); ++a)
-      for (std::size_t b = a + 1; b < members.size(); ++b) {
-        const Grain &gi = grains[members[a]], &gj = grains[members[b]];
-        if (gj.x.x() - gi.x.x() > 2.0 * r_max) break;
-        const double gap = (gi.x - gj.x).norm() - gi.r - gj.r;
-        if (gap <= contact_tol * std::min(gi.r, gj.r)) uf.join(members[a], members[b]);
-      }
-  }
+  // Plain distances, no periodic image: the blocks cut the cell, and a cluster never spans a cut.
+  const PairSearch pairs(grains, dimension, Container{}, r_max * (2.0 + std::max(contact_tol, 0.0)) * 1.0001);
+  pairs.for_each_pair([&](std::size_t a, std::size_t b, const Vec3& d) {
+    if (block[a] != block[b] || std::abs(d.x()) > 2.0 * r_max) return;
+    // the radii subtracted in order of x, then of index, as the sweep along x did
+    const bool a_first = grains[a].x.x() < grains[b].x.x() || (grains[a].x.x() == grains[b].x.x() && a < b);
+    const Grain &gi = grains[a_first ? a : b], &gj = grains[a_first ? b : a];
+    const double gap = d.norm() - gi.r - gj.r;
+    if (gap <= contact_tol * std::min(gi.r, gj.r)) uf.join(a, b);
+  });
   std::map<std::size_t, std::vector<std::size_t>> by_root;
   for (std::size_t i = 0; i < grains.size(); ++i) by_root[uf.find(i)].push_back(i);
   std::vector<std::vector<std::size_t>> out;

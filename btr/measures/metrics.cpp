@@ -7,6 +7,8 @@
 #include <limits>
 #include <map>
 
+#include "btr/placement/pair_search.h"
+
 namespace btr {
 namespace {
 
@@ -133,121 +135,6 @@ bool in_window(const Vec3& x, int dimension, const Box& w) {
   if (x.x() < w.lo.x() || x.x() > w.hi.x() || x.z() < w.lo.z() || x.z() > w.hi.z()) return false;
   return dimension == 2 || (x.y() >= w.lo.y() && x.y() <= w.hi.y());
 }
-
-// ---------------------------------------------------------------- neighbour cells
-
-// Grains sorted into cubic cells (squares in x-z for 2D) at least one largest diameter wide.
-class Cells {
- public:
-  Cells(const Grains& grains, int dimension, const Container& container, double width) {
-    Vec3 lo = Vec3::Constant(std::numeric_limits<double>::max()), hi = -lo;
-    for (const Grain& g : grains) {
-      lo = lo.cwiseMin(g.x);
-      hi = hi.cwiseMax(g.x);
-    }
-    if (dimension == 2) lo.y() = hi.y() = 0.0;
-    dim3_ = dimension == 3;
-    // Keep the dense cell array at most a few times the number of grains.
-    for (;;) {
-      for (int a = 0; a < 3; ++a) {
-        periodic_[a] = (a == 0 && wraps_x(container)) || (a == 1 && wraps_y(container, dimension));
-        if (periodic_[a]) {
-          period_[a] = a == 0 ? container.size_x : container.size_y;
-          origin_[a] = -0.5 * period_[a];
-          n_[a] = std::max(1, static_cast<int>(std::floor(period_[a] / width)));
-          size_[a] = period_[a] / n_[a];
-        } else {
-          origin_[a] = lo[a];
-          size_[a] = width;
-          n_[a] = static_cast<int>(std::floor((hi[a] - lo[a]) / width)) + 1;
-        }
-      }
-      if (dimension == 2) n_[1] = 1;
-      double cells = double(n_[0]) * n_[1] * n_[2];
-      if (cells <= 8.0 * grains.size() + 4096) break;
-      width *= 1.5;
-    }
-    const std::size_t ncells = std::size_t(n_[0]) * n_[1] * n_[2];
-    start_.assign(ncells + 1, 0);
-    std::vector<std::uint32_t> cell(grains.size());
-    for (std::size_t i = 0; i < grains.size(); ++i) {
-      cell[i] = static_cast<std::uint32_t>(index(coords(grains[i].x)));
-      ++start_[cell[i] + 1];
-    }
-    for (std::size_t c = 0; c < ncells; ++c) start_[c + 1] += start_[c];
-    order_.resize(grains.size());
-    std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
-    for (std::size_t i = 0; i < grains.size(); ++i) order_[fill[cell[i]]++] = static_cast<std::uint32_t>(i);
-    sorted_.resize(grains.size());
-    for (std::size_t p = 0; p < order_.size(); ++p) sorted_[p] = grains[order_[p]].x;
-  }
-
-  // Grain indices in cell order: visiting centres in this order keeps the neighbour cells in cache.
-  const std::vector<std::uint32_t>& order() const { return order_; }
-
-  // Calls f(j, centre of j) for every grain j in the cells within `reach` cells of position x's cell (each cell once).
-  template <class F>
-  void for_neighbours(const Vec3& x, F&& f, int reach = 1) const {
-    constexpr int kMaxReach = 4;
-    reach = std::clamp(reach, 1, kMaxReach);
-    std::array<int, 3> c = coords(x);
-    std::array<std::array<int, 2 * kMaxReach + 1>, 3> idx;
-    std::array<int, 3> count{};
-    for (int a = 0; a < 3; ++a) {
-      for (int d = -reach; d <= reach; ++d) {
-        int k = c[a] + d;
-        if (periodic_[a]) k = ((k % n_[a]) + n_[a]) % n_[a];
-        else if (k < 0 || k >= n_[a]) continue;
-        bool seen = false;
-        for (int q = 0; q < count[a]; ++q) seen = seen || idx[a][q] == k;
-        if (!seen) idx[a][count[a]++] = k;
-      }
-    }
-    for (int i = 0; i < count[0]; ++i)
-      for (int j = 0; j < count[1]; ++j)
-        for (int k = 0; k < count[2]; ++k) {
-          std::size_t cell = index({idx[0][i], idx[1][j], idx[2][k]});
-          for (std::uint32_t p = start_[cell]; p < start_[cell + 1]; ++p) f(order_[p], sorted_[p]);
-        }
-  }
-
-  // The narrowest cell side (axes in use).
-  double width() const {
-    double w = std::min(size_[0], size_[2]);
-    return dim3_ ? std::min(w, size_[1]) : w;
-  }
-
-  // Shortest separation vector from b to a (minimum image across periodic sides).
-  Vec3 separation(const Vec3& a, const Vec3& b) const {
-    Vec3 d = a - b;
-    for (int k = 0; k < 3; ++k) {
-      if (!periodic_[k]) continue;
-      if (std::abs(d[k]) > 0.5 * period_[k]) d[k] -= period_[k] * std::round(d[k] / period_[k]);
-    }
-    return d;
-  }
-
- private:
-  std::array<int, 3> coords(const Vec3& x) const {
-    std::array<int, 3> c{};
-    for (int a = 0; a < 3; ++a) {
-      int k = static_cast<int>(std::floor((x[a] - origin_[a]) / size_[a]));
-      if (periodic_[a]) k = ((k % n_[a]) + n_[a]) % n_[a];
-      c[a] = std::clamp(k, 0, n_[a] - 1);
-    }
-    return c;
-  }
-  std::size_t index(const std::array<int, 3>& c) const {
-    return (std::size_t(c[2]) * n_[1] + c[1]) * n_[0] + c[0];
-  }
-
-  bool dim3_ = true;
-  bool periodic_[3] = {false, false, false};
-  double period_[3] = {0, 0, 0}, origin_[3] = {0, 0, 0}, size_[3] = {1, 1, 1};
-  int n_[3] = {1, 1, 1};
-  std::vector<std::uint32_t> start_, order_;
-  std::vector<Vec3> sorted_;  // grain centres in cell order, contiguous for the neighbour loops
-};
 
 // Least-squares line y = a + b x through points added one by one.
 struct LineFit {
@@ -392,19 +279,15 @@ std::vector<int> coordination_numbers(const Grains& grains, int dimension, const
   std::vector<int> z(grains.size(), 0);
   if (grains.empty()) return z;
   const double r_max = max_radius(grains);
-  Cells cells(grains, dimension, container, 2.0 * r_max * (1.0 + 2.0 * contact_tol) * 1.0001);
-  for (std::size_t i = 0; i < grains.size(); ++i) {
-    const Grain& gi = grains[i];
-    cells.for_neighbours(gi.x, [&](std::uint32_t j, const Vec3& xj) {
-      if (j <= i) return;
-      const Grain& gj = grains[j];
-      const double gap = cells.separation(gi.x, xj).norm() - gi.r - gj.r;
-      if (gap < contact_tol * std::min(gi.r, gj.r)) {
-        ++z[i];
-        ++z[j];
-      }
-    });
-  }
+  const PairSearch pairs(grains, dimension, container, 2.0 * r_max * (1.0 + 2.0 * contact_tol) * 1.0001);
+  pairs.for_each_pair([&](std::size_t a, std::size_t b, const Vec3& d) {
+    const auto [i, j] = std::minmax(a, b);  // the radii subtracted in index order, as always
+    const double gap = d.norm() - grains[i].r - grains[j].r;
+    if (gap < contact_tol * std::min(grains[i].r, grains[j].r)) {
+      ++z[i];
+      ++z[j];
+    }
+  });
   return z;
 }
 
@@ -685,27 +568,19 @@ RadialDistribution radial_distribution(const Grains& grains, int dimension, cons
   for (int k = 0; k < nbins; ++k) out.r_over_d[k] = (k + 0.5) * options.rdf_bin_d;
   if (!bulk.valid || bulk.grains_in_window == 0 || !(bulk.window_volume > 0.0)) return out;
   std::vector<double> counts(nbins, 0.0);
-  // Cells a third of the reach wide, searched 3 cells out: fewer needless pairs than reach-wide cells.
-  constexpr int kCellsPerReach = 3;
-  Cells cells(grains, dimension, container, std::max(reach / kCellsPerReach, 2.0 * max_radius(grains)) * 1.0001);
-  const int search = static_cast<int>(std::ceil(reach / cells.width() - 1e-12));
-  const double reach2 = reach * reach;
+  std::vector<char> centre(grains.size());
   std::int64_t centres = 0;
-  for (const std::uint32_t i : cells.order()) {
-    const Vec3& x = grains[i].x;
-    if (!in_bulk_window(bulk, x, dimension)) continue;
-    ++centres;
-    cells.for_neighbours(
-        x,
-        [&](std::uint32_t j, const Vec3& xj) {
-          if (j == i) return;
-          const double r2 = cells.separation(xj, x).squaredNorm();
-          if (r2 >= reach2) return;
-          const int k = static_cast<int>(std::sqrt(r2) / bin);
-          if (k < nbins) counts[k] += 1.0;
-        },
-        search);
-  }
+  for (std::size_t i = 0; i < grains.size(); ++i) centres += centre[i] = in_bulk_window(bulk, grains[i].x, dimension);
+  // Cells up to a third of the reach wide (never narrower than a largest diameter): fewer needless pairs.
+  constexpr int kCellsPerReach = 3;
+  const double reach2 = reach * reach;
+  const PairSearch pairs(grains, dimension, container, reach, kCellsPerReach);
+  pairs.for_each_pair([&](std::size_t i, std::size_t j, const Vec3& d) {
+    const double r2 = d.squaredNorm();
+    if (r2 >= reach2) return;
+    const int k = static_cast<int>(std::sqrt(r2) / bin);
+    if (k < nbins) counts[k] += centre[i] + centre[j];  // each pair counts once per window grain in it
+  });
   const double density = double(centres) / bulk.window_volume;
   out.g.resize(nbins);
   for (int k = 0; k < nbins; ++k) {

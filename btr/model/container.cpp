@@ -20,4 +20,15 @@ bool wraps_y(const Container& c, int dimension) {
   return dimension == 3 && (c.kind == ContainerKind::Periodic || (c.kind == ContainerKind::Drum && c.periodic_ends));
 }
 
+double period_along(const Container& c, int dimension, int axis) {
+  if (axis == 0) return wraps_x(c) ? c.size_x : 0.0;
+  return axis == 1 && wraps_y(c, dimension) ? c.size_y : 0.0;
+}
+
+Vec3 wrap_into_cell(const Container& c, int dimension, Vec3 x) {
+  if (wraps_x(c)) x.x() = wrap_coordinate(x.x(), c.size_x);
+  if (wraps_y(c, dimension)) x.y() = wrap_coordinate(x.y(), c.size_y);
+  return x;
+}
+
 }  // namespace btr

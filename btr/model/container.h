@@ -9,7 +9,10 @@
 //   drum       horizontal cylinder of radius `radius` with its axis along y at height z = radius (its
 //              lowest line is the floor z = 0); 3D: flat end walls at y = +-size_y/2 (its length)
 //              or, with periodic_ends, periodic in y with period size_y; 2D: a circle of disks in the x-z plane
+#include <cmath>
 #include <string>
+
+#include "btr/model/grain.h"
 
 namespace btr {
 
@@ -29,6 +32,25 @@ struct Container {
 // 3D periodic container and in a 3D drum with periodic ends.
 bool wraps_x(const Container& container);
 bool wraps_y(const Container& container, int dimension);
+
+// The period along x (axis 0) or y (axis 1): size_x or size_y where the container wraps, else 0.
+double period_along(const Container& container, int dimension, int axis);
+
+// The periodic wrap, written once (the self-check in btr/verify keeps its own on purpose):
+// a coordinate brought into the domain [-L/2, L/2) of period L,
+inline double wrap_coordinate(double x, double period) {
+  x -= period * std::floor(x / period + 0.5);
+  if (x >= 0.5 * period) x -= period;  // round-off can leave x on the far side of a bound
+  if (x < -0.5 * period) x = -0.5 * period;
+  return x;
+}
+// and a separation along a periodic axis reduced to its nearest image (d itself when |d| <= L/2).
+inline double minimum_image(double d, double period) {
+  return std::abs(d) > 0.5 * period ? d - period * std::round(d / period) : d;
+}
+
+// A centre with its coordinates along the container's periodic axes wrapped into the cell.
+Vec3 wrap_into_cell(const Container& container, int dimension, Vec3 x);
 
 const char* to_string(ContainerKind kind);
 

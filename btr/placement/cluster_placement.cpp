@@ -66,11 +66,7 @@ class Placer {
   // Adds the members at rest to the engine's grains and grid.
   void commit() {
     for (std::size_t k = 0; k < shape_.size(); ++k) {
-      Vec3 x = member(k);
-      if (e_.container.kind == ContainerKind::Periodic) {
-        x.x() -= e_.container.size_x * std::floor(x.x() / e_.container.size_x + 0.5);
-        if (e_.dimension == 3) x.y() -= e_.container.size_y * std::floor(x.y() / e_.container.size_y + 0.5);
-      }
+      Vec3 x = wrap_into_cell(e_.container, e_.dimension, member(k));
       if (e_.dimension == 2) x.y() = 0.0;
       Grain g{x, shape_.radii[k], shape_.species[k]};
       g.cluster = number_;

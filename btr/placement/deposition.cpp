@@ -644,8 +644,8 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
     throw PlacementError(id, why.str());
   }
   double px = drop.x, py = dimension == 3 ? drop.y : 0.0;
-  if (wraps_x(container)) px -= container.size_x * std::floor(px / container.size_x + 0.5);
-  if (wraps_y(container, dimension)) py -= container.size_y * std::floor(py / container.size_y + 0.5);
+  if (wraps_x(container)) px = wrap_coordinate(px, container.size_x);
+  if (wraps_y(container, dimension)) py = wrap_coordinate(py, container.size_y);
   const std::string misfit = drop_misfit(container, dimension, px, py, r);
   if (!misfit.empty()) throw PlacementError(id, "dropped outside the container: " + misfit);
   onto_footprint(container, dimension, px, py, r);
@@ -812,8 +812,7 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
   }
   if (active.overflow) throw too_many_contacts(id, x);
   back_inside_walls(id, x, r);
-  if (wraps_x(container)) x.x() -= container.size_x * std::floor(x.x() / container.size_x + 0.5);
-  if (wraps_y(container, dimension)) x.y() -= container.size_y * std::floor(x.y() / container.size_y + 0.5);
+  x = wrap_into_cell(container, dimension, x);
   if (!x.allFinite()) throw PlacementError(id, "the placement ended at a non-finite position");
   try {
     grid.insert(static_cast<std::int32_t>(grains.size()), x, r);

@@ -124,16 +124,6 @@ void DropSequence::disk(double radius, double& x, double& y) {
   y = radius * v;
 }
 
-namespace {
-// Into the periodic domain [-L/2, L/2).
-double wrap(double x, double L) {
-  x -= L * std::floor((x + 0.5 * L) / L);
-  if (x >= 0.5 * L) x -= L;
-  if (x < -0.5 * L) x = -0.5 * L;
-  return x;
-}
-}  // namespace
-
 void DropSequence::position(double r, Drop& d) {
   const bool three = dimension_ == 3;
   const Container& c = container_;
@@ -172,8 +162,8 @@ void DropSequence::position(double r, Drop& d) {
       break;
     case SourceSpec::Kind::List: break;
   }
-  if (wraps_x(c)) d.x = wrap(d.x, c.size_x);
-  if (wraps_y(c, dimension_)) d.y = wrap(d.y, c.size_y);
+  if (wraps_x(c)) d.x = wrap_coordinate(d.x, c.size_x);
+  if (wraps_y(c, dimension_)) d.y = wrap_coordinate(d.y, c.size_y);
   if (!three) d.y = 0.0;
 }
 

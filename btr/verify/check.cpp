@@ -254,6 +254,7 @@ MinimumImage::MinimumImage(const Container& c, int dimension)
       ly(c.size_y) {}
 
 Vec3 MinimumImage::operator()(Vec3 d) const {
+  // Not container.h's minimum_image: the self-check shares no geometry code with what it checks.
   auto wrap = [](double& v, double period) {
     if (std::abs(v) <= 0.5 * period) return;
     if (std::abs(v) <= 1.5 * period) v -= v > 0 ? period : -period;

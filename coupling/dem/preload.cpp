@@ -218,11 +218,7 @@ Preloaded preload_packing(const Grains& grains, const Scene& scene) {
     sink[i] = grains[i].x.z() - x.z();
     out.largest_move = std::max(out.largest_move, (x - grains[i].x).norm());
     unwrapped[i] = x;
-    if (c.kind == ContainerKind::Periodic) {
-      x.x() -= c.size_x * std::floor(x.x() / c.size_x + 0.5);
-      if (dim == 3) x.y() -= c.size_y * std::floor(x.y() / c.size_y + 0.5);
-    }
-    moved[i].x = x;
+    moved[i].x = wrap_into_cell(c, dim, x);
   }
   out.rms_misfit = misfit_count ? std::sqrt(misfit_sq / static_cast<double>(misfit_count)) : 0.0;
   return out;

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.geometry import Container
-from ..core.neighbours import tree
+from ..core.neighbours import within
 
 
 def mean_diameter(radius: np.ndarray) -> float:
@@ -21,7 +21,7 @@ def local_displacement(pre_pos: np.ndarray, disp: np.ndarray, container: Contain
     the part of a grain's displacement its neighbourhood did not share. A bed settling as a whole
     (elastic compression, a rigid shift) has large displacements but small local ones."""
     coords = container.coords(pre_pos)
-    lists = tree(coords, container).query_ball_point(container.wrap(coords), reach, return_sorted=False)
+    lists = within(coords, container, reach)
     out = np.empty(len(disp))
     for i, nb in enumerate(lists):
         out[i] = np.linalg.norm(disp[i] - disp[nb].mean(axis=0))

@@ -58,11 +58,14 @@ class Container:
 
     def periods(self) -> np.ndarray:
         """Period of each coordinate of coords(); 0 where not periodic."""
-        lx = self.size_x if self.kind == "periodic" else 0.0
-        if self.dimension == 2:
-            return np.array([lx, 0.0])
-        ly = self.size_y if self.kind == "periodic" else 0.0
-        return np.array([lx, ly, 0.0])
+        lx, ly, _ = self.periods_xyz()
+        return np.array([lx, 0.0]) if self.dimension == 2 else np.array([lx, ly, 0.0])
+
+    def periods_xyz(self) -> np.ndarray:
+        """Period along x, y and z; 0 where not periodic."""
+        periodic = self.kind == "periodic"
+        return np.array([self.size_x if periodic else 0.0,
+                         self.size_y if periodic and self.dimension == 3 else 0.0, 0.0])
 
     def wrap(self, c: np.ndarray) -> np.ndarray:
         """Coordinates shifted into [0, L) along periodic axes (what scipy's periodic cKDTree wants)."""
@@ -75,20 +78,11 @@ class Container:
 
     def minimum_image(self, delta: np.ndarray) -> np.ndarray:
         """Difference vectors (in coords()) reduced to the nearest periodic image."""
-        delta = np.array(delta, dtype=float, copy=True)
-        for k, length in enumerate(self.periods()):
-            if length > 0:
-                delta[..., k] -= length * np.round(delta[..., k] / length)
-        return delta
+        return _nearest_image(delta, self.periods())
 
     def minimum_image_xyz(self, delta: np.ndarray) -> np.ndarray:
         """Like minimum_image, for full (x, y, z) vectors."""
-        delta = np.array(delta, dtype=float, copy=True)
-        if self.kind == "periodic":
-            for k, length in ((0, self.size_x), (1, self.size_y if self.dimension == 3 else 0.0)):
-                if length > 0:
-                    delta[..., k] -= length * np.round(delta[..., k] / length)
-        return delta
+        return _nearest_image(delta, self.periods_xyz())
 
     # ---- walls ----------------------------------------------------------------------------------
 
@@ -166,3 +160,12 @@ class Container:
         if self.kind == "periodic":
             return ok
         return ok & (self.wall_distance(pos) >= 0.0)
+
+
+def _nearest_image(delta: np.ndarray, periods: np.ndarray) -> np.ndarray:
+    """delta (..., len(periods)) with each periodic component reduced to its nearest image."""
+    delta = np.array(delta, dtype=float, copy=True)
+    for k, length in enumerate(periods):
+        if length > 0:
+            delta[..., k] -= length * np.round(delta[..., k] / length)
+    return delta

@@ -1,6 +1,7 @@
-"""Neighbour search on packings (periodic sides wrap): the pairs within a distance, for the overlap and
-support checks of the workflows. The coordination number is not computed here: it is a measure, and
-`btr measure` (btr/measures/metrics.cpp) is its one definition."""
+"""Neighbour search on packings (periodic sides wrap, through geometry.Container): the points within a
+distance and the touching pairs, for the support analysis and the local displacement of the workflows.
+The coordination number is not computed here: it is a measure, and `btr measure`
+(btr/measures/metrics.cpp) is its one definition."""
 from __future__ import annotations
 
 import numpy as np
@@ -9,7 +10,7 @@ from scipy.spatial import cKDTree
 from .geometry import Container
 
 
-def tree(coords: np.ndarray, container: Container) -> cKDTree:
+def _tree(coords: np.ndarray, container: Container) -> cKDTree:
     """A k-d tree of coords() positions, periodic where the container is."""
     data = container.wrap(coords)
     periods = container.periods()
@@ -18,17 +19,22 @@ def tree(coords: np.ndarray, container: Container) -> cKDTree:
     return cKDTree(data)
 
 
+def within(coords: np.ndarray, container: Container, reach) -> list:
+    """For each point of coords(), the indices of the points within `reach` of it (a number, or one per
+    point), itself included, in no particular order."""
+    return _tree(coords, container).query_ball_point(container.wrap(coords), reach, return_sorted=False)
+
+
 def touching_pairs(pos: np.ndarray, r: np.ndarray, container: Container, tol: float = 0.0):
     """Pairs (i, j), i < j, with centre distance < (r_i + r_j)(1 + tol), and those distances."""
     coords = container.coords(pos)
     if len(coords) < 2:
         return np.zeros((0, 2), dtype=int), np.zeros(0)
-    t = tree(coords, container)
     r_max = float(np.max(r))
     if r_max / float(np.min(r)) < 3.0:
-        pairs = t.query_pairs(2.0 * r_max * (1.0 + tol), output_type="ndarray")
+        pairs = _tree(coords, container).query_pairs(2.0 * r_max * (1.0 + tol), output_type="ndarray")
     else:  # wide size distributions: search each grain's own reach, not the largest one
-        lists = t.query_ball_point(container.wrap(coords), (r + r_max) * (1.0 + tol), return_sorted=False)
+        lists = within(coords, container, (r + r_max) * (1.0 + tol))
         ii = np.repeat(np.arange(len(lists)), [len(x) for x in lists])
         jj = np.concatenate([np.asarray(x, dtype=int) for x in lists]) if len(lists) else np.zeros(0, int)
         keep = jj > ii
