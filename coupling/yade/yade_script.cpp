@@ -1,5 +1,5 @@
 // Writes the YADE script of a relaxation: a header saying how to run it and what it does, the shared Python
-// functions (yade_script_library.cpp), then the scene: numbers of the run, materials and pair values,
+// functions (yade_library.py), then the scene: numbers of the run, materials and pair values,
 // the grains, and exactly the walls of the container (dem_walls.h).
 //
 // Matching the LIGGGHTS run (liggghts_script.cpp) as closely as YADE allows:

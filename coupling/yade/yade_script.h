@@ -20,7 +20,7 @@ constexpr const char* kLog = "yade.log";
 // Where Debian installs the `yade` Python module (package yade, double precision build).
 constexpr const char* kYadePythonPath = "/usr/lib/x86_64-linux-gnu/yade-double/py";
 
-// The Python functions every script shares (coupling/yade/yade_script_library.cpp).
+// The Python functions every script shares (coupling/yade/yade_library.py, embedded by the build).
 const char* yade_script_library();
 
 // The whole script for this packing and scene. Throws std::invalid_argument naming the scene file and

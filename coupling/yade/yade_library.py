@@ -1,12 +1,8 @@
-// The Python half of every YADE relaxation script: reading the packing, walls, contact laws, the run loop with
-// its stop rule and failure checks, and the output files. yade_script.cpp writes the header before it and the
-// scene-specific calls (numbers, materials, pairs, grains, walls) after it.
-#include "coupling/yade/yade_script.h"
-
-namespace btr {
-
-const char* yade_script_library() {
-  return R"yade_py(import json
+# The Python half of every YADE relaxation script: reading the packing, walls, contact laws, the run loop with
+# its stop rule and failure checks, and the output files. coupling/yade/yade_script.cpp writes a header before
+# it and the scene-specific calls (numbers, materials, pairs, grains, walls) after it; the build embeds this
+# file into the btr program (coupling/CMakeLists.txt), so a script btr writes is whole on its own.
+import json
 import math
 import os
 import sys
@@ -633,7 +629,3 @@ def main():
             write_history()
         write_status("failed", "", message, time.time() - t0)
         return 1
-)yade_py";
-}
-
-}  // namespace btr

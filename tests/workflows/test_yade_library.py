@@ -1,0 +1,68 @@
+"""The YADE script library (coupling/yade/yade_library.py): a real Python file, embedded by the build into
+every YADE script btr writes. Its helpers are tested here against values computed by hand."""
+import importlib.util
+import math
+import subprocess
+import sys
+
+import pytest
+
+YADE_PATH = "/usr/lib/x86_64-linux-gnu/yade-double/py"
+
+
+@pytest.fixture()
+def library(tmp_path, source_dir, monkeypatch):
+    """The library loaded as a module whose folder (HERE, taken from argv[0]) is tmp_path."""
+    (tmp_path / "yade_status.json").write_text("stale\n")  # an earlier run's output
+    monkeypatch.setattr(sys, "argv", [str(tmp_path / "relax_yade.py")])
+    monkeypatch.syspath_prepend(YADE_PATH)
+    spec = importlib.util.spec_from_file_location("btr_yade_library", source_dir / "coupling/yade/yade_library.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_stale_outputs_are_removed_on_start(library, tmp_path):
+    assert not (tmp_path / "yade_status.json").exists()
+
+
+def test_wrap_gives_the_minimum_image(library):
+    assert library.wrap(0.7, 1.0) == pytest.approx(-0.3)
+    assert library.wrap(-0.7, 1.0) == pytest.approx(0.3)
+    assert library.wrap(0.2, 1.0) == pytest.approx(0.2)
+    assert library.wrap(2.2, 1.0) == pytest.approx(0.2)
+
+
+@pytest.mark.parametrize("dimension", [2, 3])
+def test_grain_part_between_planes(library, dimension):
+    library.DIMENSION = dimension
+    r, z = 0.5, 3.0
+    whole = 4.0 / 3.0 * math.pi * r ** 3 if dimension == 3 else math.pi * r ** 2
+    assert library.grain_part_between(z, r, -10.0, 10.0) == pytest.approx(whole)
+    assert library.grain_part_between(z, r, z, 10.0) == pytest.approx(0.5 * whole)
+    assert library.grain_part_between(z, r, z + r, 10.0) == 0.0
+    # a cap of height h = r/2: pi h^2 (3r - h) / 3 in 3D; r^2 acos((r-h)/r) - (r-h) sqrt(2rh - h^2) in 2D
+    h = 0.5 * r
+    cap = (math.pi * h * h * (3 * r - h) / 3.0 if dimension == 3
+           else r * r * math.acos((r - h) / r) - (r - h) * math.sqrt(2 * r * h - h * h))
+    assert library.grain_part_between(z, r, z + r - h, 10.0) == pytest.approx(cap)
+
+
+def test_write_atomically_leaves_only_the_file(library, tmp_path):
+    library.write_atomically("out.txt", "one\n")
+    library.write_atomically("out.txt", "two\n")
+    assert (tmp_path / "out.txt").read_text() == "two\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.txt"]
+
+
+def test_every_yade_script_carries_the_library(tmp_path, source_dir, btr_binary):
+    """btr writes the file's code (less its leading comment block) into each script it exports."""
+    subprocess.run([btr_binary, "deposit", str(source_dir / "inputs/bed3d.toml"), "-o", str(tmp_path / "bed"),
+                    "--count", "60"], check=True, capture_output=True)
+    subprocess.run([btr_binary, "export", str(tmp_path / "bed/bed3d.csv"), "--to", "yade", "-o",
+                    str(tmp_path / "yade")], check=True, capture_output=True)
+    text = (source_dir / "coupling/yade/yade_library.py").read_text()
+    code = text[text.index("\nimport ") + 1:]
+    scripts = list((tmp_path / "yade").glob("*.py"))
+    assert len(scripts) == 1
+    assert code in scripts[0].read_text()
