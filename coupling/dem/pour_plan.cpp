@@ -156,10 +156,14 @@ PourLattice pour_lattice(const Grains& grains, const Scene& scene, std::uint64_t
   L.sites_per_layer = sites.size();
   L.layers = (grains.size() + sites.size() - 1) / sites.size();
   L.layers_per_batch = std::max<std::size_t>(1, (L.layers + max_batches - 1) / max_batches);
-  // The first batch is moved down at once; later ones wait above the pile, which stays below their layers
-  // (it is denser than the lattice and at least as wide); the release checks that it does.
-  L.hold_base = drop_gap + 10.0 * r_max;
   const double jitter = kPourJitter * L.spacing;
+  // Batch k is placed drop_gap + 2 r_max above the highest released centre, which is at most its predecessor's
+  // top where nothing has settled yet (a fast pace): the released grains climb by at most drop_gap + 2 r_max +
+  // a batch's thickness per batch, the held lattice's batches lie spacing > 2 r_max + 2 jitter apart, so a
+  // lowest layer drop_gap x batches (+ the first batch's drop, the jitter and a few radii for bounces) up keeps
+  // every held batch above the stream. The release checks it.
+  const std::size_t n_batches = (L.layers + L.layers_per_batch - 1) / L.layers_per_batch;
+  L.hold_base = static_cast<double>(n_batches + 1) * drop_gap + 6.0 * r_max + jitter;
   std::mt19937_64 rng(seed);
   auto draw = [&](double amplitude) { return amplitude * (2.0 * unit(rng) - 1.0); };
   std::vector<std::size_t> order(sites.size());

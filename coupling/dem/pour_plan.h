@@ -51,7 +51,8 @@ std::vector<std::pair<double, double>> pour_sites(const Scene& scene, double r_m
 
 // The grains in id order on the lattice: grain k takes layer k / sites_per_layer, a site in a seeded random
 // order per layer (so a partial top layer is spread), jittered; layers from hold_base up, batches of
-// ceil(layers / max_batches) layers; hold_base = drop_gap [m] + 10 r_max. Deterministic: the same grains,
+// ceil(layers / max_batches) layers; hold_base = (batches + 1) drop_gap [m] + 6 r_max + the jitter, above
+// anything the stream of released grains reaches. Deterministic: the same grains,
 // scene and seed give the same lattice.
 PourLattice pour_lattice(const Grains& grains, const Scene& scene, std::uint64_t seed, int max_batches,
                          double drop_gap);
