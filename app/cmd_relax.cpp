@@ -1,18 +1,59 @@
 // `btr relax PACKING.csv --engine liggghts|yade [--np N] -o OUTDIR`: run a DEM relaxation of a packing
 // and write the relaxed packing, its kinetic-energy history and its contacts into OUTDIR.
 #include <cmath>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 
 #include "commands.h"
+#include "coupling/dem/materials.h"
+#include "coupling/dem/preload.h"
 #include "coupling/dem/process.h"
 #include "coupling/dem/relax.h"
+#include "coupling/io/atomic_file.h"
 #include "coupling/engines.h"
 #include "load_packing.h"
 #include "measures_json.h"
 #include "validators.h"
 
 namespace btr_app {
+namespace {
+
+constexpr const char* kPredictedOverlapFile = "predicted_overlap.json";
+
+nlohmann::json load_json(const btr::StaticOverlap::Load& l) {
+  return {{"mean_relative", l.mean_relative}, {"largest_relative", l.largest_relative}, {"mean_overlap", l.mean_depth}};
+}
+
+// `--predict-overlap`: the contact law's static overlap of the grains on the floor (coupling/dem/preload.h),
+// written to OUTDIR/predicted_overlap.json and summed up on the console; no engine is run.
+int predict_overlap(const PackingWithScene& p, const std::string& out_dir) {
+  const btr::StaticOverlap s = btr::predict_static_overlap(p.packing.grains, p.scene);
+  const btr::Component& wall = btr::wall_component(p.scene);
+  const nlohmann::json j = {
+      {"law", s.law},
+      {"floor_grains", s.floor_grains},
+      {"total_weight", s.total_weight},
+      {"column_force", s.column_force},
+      {"single_grain", load_json(s.single)},
+      {"under_column", load_json(s.column)},
+      {"wall_material", {{"species", wall.species}, {"young", wall.material.young}, {"poisson", wall.material.poisson}}},
+      {"definition",
+       "static overlap of the contact law (relax.model) between a grain and the floor: single_grain under the grain's "
+       "own weight, under_column under the packing's total weight shared by the grains on the floor (gap to the floor "
+       "at most 1e-3 of the radius); *_relative: overlap / the grain's radius, mean and largest over those grains; "
+       "mean_overlap in m"}};
+  std::filesystem::create_directories(out_dir);
+  const std::string path = (std::filesystem::path(out_dir) / kPredictedOverlapFile).string();
+  btr::write_text_file(path, j.dump(1) + "\n");
+  std::cout << "predicted static overlap (" << s.law << ", " << s.floor_grains
+            << " grains on the floor): one grain under its weight " << s.single.mean_relative
+            << " of its radius, under its column (" << s.column_force << " N) " << s.column.mean_relative
+            << "\nwrote " << path << "\n";
+  return kSuccess;
+}
+
+}  // namespace
 
 Runner add_relax_command(CLI::App& app) {
   struct Options {
@@ -27,13 +68,14 @@ Runner add_relax_command(CLI::App& app) {
     double compaction_timestep_fraction = 0.0;
     std::vector<double> friction_scales;
     std::string stop_rule;
+    bool predict_overlap = false;
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand("relax", "Relax a packing in LIGGGHTS or YADE and read the result back");
   cmd->footer(
-      "Exit codes: 0 ok, 2 bad input, 5 the engine failed, 6 --target-phi not reached (the relaxed packing is "
-      "written), 128+N stopped by signal N (SIGTERM, SIGINT, SIGHUP: the engine and every process it started are "
-      "ended first).");
+      "Exit codes: 0 ok, 2 bad input, 5 the engine failed (OUTDIR/relax_failure.json says how: its \"kind\"), 6 "
+      "--target-phi not reached (the relaxed packing is written), 128+N stopped by signal N (SIGTERM, SIGINT, SIGHUP: "
+      "the engine and every process it started are ended first).");
   cmd->add_option("packing", o->packing, "PACKING.csv (the scene is read from PACKING.json beside it)")
       ->required()
       ->check(CLI::ExistingFile);
@@ -95,10 +137,15 @@ Runner add_relax_command(CLI::App& app) {
   cmd->add_option("--time-limit", o->settings.wall_time_limit, "wall-time limit of the engine run [s]")
       ->capture_default_str()
       ->check(positive_number());
+  cmd->add_flag("--predict-overlap", o->predict_overlap,
+                "only predict: write OUTDIR/" + std::string(kPredictedOverlapFile) +
+                    ", the contact law's static overlap of a grain on the floor alone and under its column, "
+                    "and run no engine");
 
   return [o, cmd]() -> int {
     try {
       PackingWithScene p = load_packing_with_scene(o->packing);
+      if (o->predict_overlap) return predict_overlap(p, o->out);
       if (cmd->count("--timestep")) o->settings.timestep = o->timestep;
       if (cmd->count("--force-timestep")) o->settings.forced_timestep = o->forced_timestep;
       if (cmd->count("--max-time")) p.scene.relax.max_time = o->max_time;

@@ -22,6 +22,7 @@ std::vector<std::string> export_inputs(const Packing& packing, const Scene& scen
 
 RelaxResult relax(const Packing& packing, const Scene& scene, const std::string& engine,
                   const RelaxSettings& settings, const std::string& out_dir) {
+  clear_failure_record(out_dir);  // also when this run is refused before the engine starts
   check_clusters_supported(packing, scene, engine, settings);
   const auto adapter = make_adapter(engine);
   IntendedOverlaps intended;

@@ -18,7 +18,8 @@ std::unique_ptr<EngineAdapter> make_adapter(const std::string& engine);
 std::vector<std::string> export_inputs(const Packing& packing, const Scene& scene, const std::string& engine,
                                        const RelaxSettings& settings, const std::string& dir);
 
-// Writes the inputs into out_dir, runs the engine there, and reads the result back.
+// Writes the inputs into out_dir, runs the engine there, and reads the result back. An EngineFailure
+// leaves out_dir/relax_failure.json (relax_plan.h, run_engine_inputs); any other end of the run leaves none.
 RelaxResult relax(const Packing& packing, const Scene& scene, const std::string& engine,
                   const RelaxSettings& settings, const std::string& out_dir);
 

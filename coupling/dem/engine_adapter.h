@@ -3,6 +3,7 @@
 // One implementation per engine: liggghts_adapter.cpp, yade_adapter.cpp.
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -101,6 +102,14 @@ class EngineAdapter {
   // Reads the outputs in dir; throws EngineFailure if they show a failed run.
   virtual RelaxResult read_back(const std::string& dir, const Packing& original, const Scene& scene,
                                 const RelaxPlan& plan) const = 0;
+  // After the engine exited non-zero or was ended by a signal: the failure its own outputs in dir report
+  // (its log's error line, its status file), with the kind and numbers they give; std::nullopt if they
+  // say nothing (relax.cpp then reports an engine_error with the exit status).
+  virtual std::optional<EngineFailure> failure_after_exit(const std::string& dir, const Packing& original,
+                                                          const Scene& scene, const RelaxPlan& plan) const {
+    (void)dir, (void)original, (void)scene, (void)plan;
+    return std::nullopt;
+  }
 };
 
 std::unique_ptr<EngineAdapter> make_liggghts_adapter();

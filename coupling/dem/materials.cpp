@@ -31,11 +31,13 @@ Material pair_material(const Material& a, const Material& b) {
   return m;
 }
 
-const Material& wall_material(const Scene& scene) {
+const Component& wall_component(const Scene& scene) {
   if (scene.grains.components.empty())
     throw std::runtime_error("scene '" + scene.name + "' has no grain component, so no wall material");
-  return scene.grains.components.front().material;
+  return scene.grains.components.front();
 }
+
+const Material& wall_material(const Scene& scene) { return wall_component(scene).material; }
 
 double effective_young(const Material& a, const Material& b) {
   return 1.0 / ((1.0 - a.poisson * a.poisson) / a.young + (1.0 - b.poisson * b.poisson) / b.young);

@@ -25,7 +25,13 @@ int component_index(const Scene& scene, int species);
 // contact between two materials (mean of the two).
 Material pair_material(const Material& a, const Material& b);
 
-// The material of every wall of the container.
+// The component whose material (and density, where an engine wants one for its wall bodies) every wall of
+// the container takes: the first component. The one place that decides it; the writers (LIGGGHTS' wall
+// type, YADE's "walls" material), the time-step rule, the blow-up bound and the contact law's overlaps
+// (preload.h) all ask here. Throws std::runtime_error if the scene has no component.
+const Component& wall_component(const Scene& scene);
+
+// wall_component(scene).material.
 const Material& wall_material(const Scene& scene);
 
 // Effective Young's modulus Y* of a contact: 1/Y* = (1 - nu_a^2)/Y_a + (1 - nu_b^2)/Y_b.

@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -35,25 +36,69 @@ ForceNetwork packing_forces(const Grains& grains, const Scene& scene) {
   return static_forces(grains, scene.dimension, scene.container, w);
 }
 
-double law_overlap(const Grains& grains, const Scene& scene, std::int64_t i, std::int64_t j, double force) {
+ContactLaw::ContactLaw(const Grains& grains, const Scene& scene) : grains_(grains), scene_(scene) {
+  if (scene.relax.model == "hooke") hooke_velocity_ = hooke_characteristic_velocity(grains);
+}
+
+double ContactLaw::overlap(std::int64_t i, std::int64_t j, double force) const {
   if (!(force > 0.0)) return 0.0;
-  const Grain& a = grains[static_cast<std::size_t>(i - 1)];
-  const Component& ca = component_of(scene, a);
+  const Grain& a = grains_[static_cast<std::size_t>(i - 1)];
+  const Component& ca = component_of(scene_, a);
   const double ma = grain_mass(a.r, ca.density);
   double r_eff = a.r, m_eff = ma, y_eff = 0.0;
+  const Material* partner = &wall_material(scene_);
   if (j > 0) {
-    const Grain& b = grains[static_cast<std::size_t>(j - 1)];
-    const Component& cb = component_of(scene, b);
+    const Grain& b = grains_[static_cast<std::size_t>(j - 1)];
+    const Component& cb = component_of(scene_, b);
     const double mb = grain_mass(b.r, cb.density);
     r_eff = a.r * b.r / (a.r + b.r);
     m_eff = ma * mb / (ma + mb);
-    y_eff = effective_young(ca.material, cb.material);
-  } else {
-    y_eff = effective_young(ca.material, wall_material(scene));
+    partner = &cb.material;
   }
-  if (scene.relax.model == "hooke")
-    return force / hooke_stiffness(r_eff, m_eff, y_eff, hooke_characteristic_velocity(grains));
+  y_eff = effective_young(ca.material, *partner);
+  if (scene_.relax.model == "hooke-stiffness")  // a wall contact takes the grain's own kn (liggghts_script.cpp)
+    return force / pair_material(ca.material, j > 0 ? *partner : ca.material).kn;
+  if (scene_.relax.model == "hooke") return force / hooke_stiffness(r_eff, m_eff, y_eff, hooke_velocity_);
   return std::pow(3.0 * force / (4.0 * y_eff * std::sqrt(r_eff)), 2.0 / 3.0);
+}
+
+double law_overlap(const Grains& grains, const Scene& scene, std::int64_t i, std::int64_t j, double force) {
+  return ContactLaw(grains, scene).overlap(i, j, force);
+}
+
+StaticOverlap predict_static_overlap(const Grains& grains, const Scene& scene) {
+  if (grains.empty()) throw std::runtime_error("the packing has no grains");
+  StaticOverlap out;
+  out.law = scene.relax.model;
+  const std::vector<double> m = grain_masses(grains, scene);
+  std::vector<std::size_t> floor;
+  double lowest = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < grains.size(); ++i) {
+    out.total_weight += m[i] * kGravity;
+    lowest = std::min(lowest, grains[i].x.z() - grains[i].r);
+    if (grains[i].x.z() - grains[i].r <= kFloorContact * grains[i].r) floor.push_back(i);
+  }
+  if (floor.empty())
+    for (std::size_t i = 0; i < grains.size(); ++i)
+      if (grains[i].x.z() - grains[i].r <= lowest + kFloorContact * grains[i].r) floor.push_back(i);
+  out.floor_grains = static_cast<std::int64_t>(floor.size());
+  out.column_force = out.total_weight / static_cast<double>(floor.size());
+  const ContactLaw law(grains, scene);
+  auto add = [&](StaticOverlap::Load& load, double delta, double r) {
+    load.mean_relative += delta / r;
+    load.mean_depth += delta;
+    load.largest_relative = std::max(load.largest_relative, delta / r);
+  };
+  for (std::size_t i : floor) {
+    const std::int64_t id = static_cast<std::int64_t>(i) + 1;
+    add(out.single, law.overlap(id, 0, m[i] * kGravity), grains[i].r);
+    add(out.column, law.overlap(id, 0, out.column_force), grains[i].r);
+  }
+  for (StaticOverlap::Load* load : {&out.single, &out.column}) {
+    load->mean_relative /= static_cast<double>(floor.size());
+    load->mean_depth /= static_cast<double>(floor.size());
+  }
+  return out;
 }
 
 Preloaded preload_packing(const Grains& grains, const Scene& scene) {
@@ -72,10 +117,11 @@ Preloaded preload_packing(const Grains& grains, const Scene& scene) {
 
   // Contacts are sorted by i: walk them grain by grain, in id order.
   const auto& contacts = out.forces.contacts;
+  const ContactLaw law(grains, scene);
   std::vector<double> delta(contacts.size());
   for (std::size_t k = 0; k < contacts.size(); ++k) {
     const ContactForce& cf = contacts[k];
-    delta[k] = law_overlap(grains, scene, cf.i, cf.j, cf.f.norm());
+    delta[k] = law.overlap(cf.i, cf.j, cf.f.norm());
     const auto key = cf.j > 0 ? std::make_pair(cf.j, cf.i) : std::make_pair(cf.i, cf.j);
     double& d = out.intended[key];
     d = std::max(d, delta[k]);  // two periodic images of one pair: keep the larger

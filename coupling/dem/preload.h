@@ -11,6 +11,7 @@
 // the bed starts compressed as it is under its weight.
 #include <cstdint>
 #include <map>
+#include <string>
 #include <utility>
 
 #include "btr/measures/force_network.h"
@@ -22,9 +23,48 @@ namespace btr {
 // The weights m g of the grains with the scene's densities, and their static force network.
 ForceNetwork packing_forces(const Grains& grains, const Scene& scene);
 
-// Overlap [m] of a contact carrying normal force `force` [N] under the scene's contact law; partner
-// j > 0 a grain id, j <= 0 the floor or a wall (ForceNetwork codes).
+// The scene's normal contact law (relax.model) as the engines run it, for the grains of one packing:
+//   hertz            F = 4/3 Y* sqrt(R*) delta^(3/2)
+//   hooke            F = k_n delta, k_n = hooke_stiffness(R*, m*, Y*, V) (timestep.h), V from the largest grain
+//   hooke-stiffness  F = kn delta, kn of pair_material (a wall: the grain's own kn, as LIGGGHTS is given)
+// Y*, R*, m* mix the two grains' materials (materials.h); a wall is wall_material(scene) with R* = r, m* = m.
+class ContactLaw {
+ public:
+  ContactLaw(const Grains& grains, const Scene& scene);
+  // Overlap [m] of a contact carrying normal force `force` [N] (0 if force <= 0); partner j > 0 a grain id,
+  // j <= 0 the floor or a wall (ForceNetwork codes).
+  double overlap(std::int64_t i, std::int64_t j, double force) const;
+
+ private:
+  const Grains& grains_;
+  const Scene& scene_;
+  double hooke_velocity_ = 0.0;
+};
+
+// ContactLaw(grains, scene).overlap(i, j, force).
 double law_overlap(const Grains& grains, const Scene& scene, std::int64_t i, std::int64_t j, double force);
+
+// The contact law's static overlap of the grains resting on the floor (`btr relax --predict-overlap`):
+// each alone, carrying its own weight m g, and under its column, carrying the packing's whole weight shared
+// equally among the grains on the floor. Floor grains: those whose gap to the floor (z - r) is at most
+// kFloorContact of their radius; if none is, the lowest (bottom within kFloorContact r of the lowest bottom).
+struct StaticOverlap {
+  std::string law;                // relax.model
+  std::int64_t floor_grains = 0;
+  double total_weight = 0.0;      // N, sum m g
+  double column_force = 0.0;      // N, total_weight / floor_grains
+  struct Load {
+    double mean_relative = 0.0;     // mean over the floor grains of delta / r
+    double largest_relative = 0.0;  // largest delta / r
+    double mean_depth = 0.0;        // mean delta [m]
+  };
+  Load single;  // each floor grain under its own weight
+  Load column;  // each floor grain under column_force
+};
+constexpr double kFloorContact = 1e-3;
+
+// Throws std::runtime_error for an empty packing or a species the scene does not have.
+StaticOverlap predict_static_overlap(const Grains& grains, const Scene& scene);
 
 struct Preloaded {
   Grains grains;              // the moved grains (same ids, radii, species)

@@ -66,7 +66,34 @@ void check_inputs(const Packing& packing, const Scene& scene) {
 
 double periodic_wrap(double x, double period) { return x - period * std::floor(x / period + 0.5); }
 
+constexpr std::pair<FailureKind, const char*> kFailureKindNames[] = {
+    {FailureKind::EngineError, "engine_error"},       {FailureKind::TimeLimit, "time_limit"},
+    {FailureKind::BlowUp, "blow_up"},                 {FailureKind::NonFinite, "non_finite"},
+    {FailureKind::LostGrains, "lost_grains"},         {FailureKind::OutsideContainer, "outside_container"},
+    {FailureKind::MissedContact, "missed_contact"},   {FailureKind::BadOutput, "bad_output"},
+};
+
+// A number for relax_failure.json: JSON has no NaN or infinity, so those are written as null.
+nlohmann::json json_number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
 }  // namespace
+
+const char* failure_kind_name(FailureKind kind) {
+  for (const auto& [k, name] : kFailureKindNames)
+    if (k == kind) return name;
+  return "engine_error";
+}
+
+std::optional<FailureKind> failure_kind_from_name(const std::string& name) {
+  for (const auto& [k, n] : kFailureKindNames)
+    if (name == n) return k;
+  return std::nullopt;
+}
+
+void clear_failure_record(const std::string& dir) {
+  std::error_code ec;
+  fs::remove(fs::path(dir) / kRelaxFailureFile, ec);
+}
 
 double kinetic_threshold(const Grains& grains, const Scene& scene) {
   const std::vector<double> m = grain_masses(grains, scene);
@@ -258,14 +285,28 @@ RelaxResult run_and_read_back(const Packing& packing, const Scene& scene, const 
   std::error_code ec;
   fs::remove(log, ec);  // a stale log must not pass for this run's
   fs::remove(console, ec);
+  clear_failure_record(dir);  // nor an earlier run's failure record
 
-  auto failure = [&](const std::string& why) -> EngineFailure {
+  // Every failure of the run comes through here: its record is written (relax_failure.json: kind, engine,
+  // why, the check's numbers) and the message gets the last lines of the engine's log and console.
+  auto failure = [&](FailureKind kind, const std::string& why,
+                     const nlohmann::json& values = nlohmann::json::object()) -> EngineFailure {
     std::string msg = engine + " " + what + " failed in " + dir + ": " + why;
+    const nlohmann::json record = {{"kind", failure_kind_name(kind)},
+                                   {"engine", engine},
+                                   {"message", why},
+                                   {"values", values.is_object() ? values : nlohmann::json::object()},
+                                   {"log", fs::path(log).filename().string()}};
+    try {
+      write_text_file((fs::path(dir) / kRelaxFailureFile).string(), record.dump(1) + "\n");
+    } catch (const std::exception& e) {
+      msg += "\n(the failure record could not be written: " + std::string(e.what()) + ")";
+    }
     const std::string log_tail = tail_lines(log, kLogTailLines);
     msg += "\n--- last lines of " + log + " ---\n" + (log_tail.empty() ? "(no log)\n" : log_tail);
     const std::string console_tail = tail_lines(console, 10);
     if (!console_tail.empty()) msg += "--- last lines of " + console + " ---\n" + console_tail;
-    return EngineFailure(msg);
+    return EngineFailure(kind, msg, values);
   };
 
   const EngineCommand cmd = adapter.command(dir, settings);
@@ -273,13 +314,33 @@ RelaxResult run_and_read_back(const Packing& packing, const Scene& scene, const 
   if (outcome.stopped_by != 0)
     throw Interrupted(outcome.stopped_by, "interrupted by " + signal_name(outcome.stopped_by) + ": the " + engine +
                                               " run in " + dir + " and every process it started were stopped");
-  if (!outcome.ok()) throw failure(outcome.describe());
+  if (!outcome.ok()) {
+    nlohmann::json values = {{"wall_seconds", outcome.wall_seconds}};
+    if (outcome.timed_out) {
+      values["time_limit"] = settings.wall_time_limit;
+      throw failure(FailureKind::TimeLimit, outcome.describe(), values);
+    }
+    if (outcome.signal != 0) values["signal"] = outcome.signal;
+    else if (outcome.started) values["exit_status"] = outcome.exit_code;
+    // The engine's own outputs may say what ended it (LIGGGHTS' ERROR line, YADE's status file).
+    std::optional<EngineFailure> reported;
+    if (outcome.started) {
+      try {
+        reported = adapter.failure_after_exit(dir, packing, scene, plan);
+      } catch (const std::exception&) {
+        reported.reset();  // outputs too broken to say more: the exit status is the failure
+      }
+    }
+    if (!reported) throw failure(FailureKind::EngineError, outcome.describe(), values);
+    values.update(reported->values());
+    throw failure(reported->kind(), outcome.describe() + ": " + reported->what(), values);
+  }
 
   RelaxResult res;
   try {
     res = adapter.read_back(dir, packing, scene, plan);
   } catch (const EngineFailure& e) {
-    throw failure(e.what());
+    throw failure(e.kind(), e.what(), e.values());
   }
   res.wall_seconds = outcome.wall_seconds;
   res.cpu_seconds = outcome.cpu_seconds;
@@ -288,50 +349,70 @@ RelaxResult run_and_read_back(const Packing& packing, const Scene& scene, const 
   const Grains& in = packing.grains;
   Grains& out = res.relaxed.grains;
   if (out.size() != in.size())
-    throw failure("lost grains: " + std::to_string(out.size()) + " of " + std::to_string(in.size()) + " came back");
+    throw failure(FailureKind::LostGrains,
+                  "lost grains: " + std::to_string(out.size()) + " of " + std::to_string(in.size()) + " came back",
+                  {{"grains", in.size()}, {"returned", out.size()}});
   std::vector<char> kept(in.size(), 1);
   if (!res.removed.empty() && !plan.has_region)
-    throw failure("lost grains: " + std::to_string(res.removed.size()) + " of " + std::to_string(in.size()) +
-                  " did not come back (only an open container removes grains)");
+    throw failure(FailureKind::LostGrains,
+                  "lost grains: " + std::to_string(res.removed.size()) + " of " + std::to_string(in.size()) +
+                      " did not come back (only an open container removes grains)",
+                  {{"grains", in.size()}, {"lost", res.removed.size()}});
   for (std::int64_t id : res.removed) {
     if (id < 1 || id > static_cast<std::int64_t>(in.size()) || !kept[id - 1])
-      throw failure("removed grain id " + std::to_string(id) + " is unknown or repeated");
+      throw failure(FailureKind::BadOutput, "removed grain id " + std::to_string(id) + " is unknown or repeated",
+                    {{"grain", id}});
     kept[id - 1] = 0;
   }
-  if (res.removed.size() == in.size()) throw failure("every grain left the region: nothing to relax");
+  if (res.removed.size() == in.size())
+    throw failure(FailureKind::LostGrains, "every grain left the region: nothing to relax",
+                  {{"grains", in.size()}, {"removed", res.removed.size()}});
   const Container& c = scene.container;
   const std::vector<DemWall> walls = dem_walls(c, scene.dimension);
   for (std::size_t i = 0; i < out.size(); ++i) {
     if (!kept[i]) continue;
     Grain& g = out[i];
     const std::string who = "grain " + std::to_string(i + 1);
-    if (!g.x.allFinite()) throw failure(who + " has a non-finite position");
-    if (g.r != in[i].r || g.species != in[i].species) throw failure(who + " came back with another radius or species");
+    if (!g.x.allFinite())
+      throw failure(FailureKind::NonFinite, who + " has a non-finite position", {{"grain", i + 1}});
+    if (g.r != in[i].r || g.species != in[i].species)
+      throw failure(FailureKind::BadOutput, who + " came back with another radius or species", {{"grain", i + 1}});
     if (scene.dimension == 2 && std::abs(g.x.y()) > 1e-9 * g.r)
-      throw failure(who + " left the plane y = 0 (y = " + g6(g.x.y()) + " m)");
+      throw failure(FailureKind::OutsideContainer, who + " left the plane y = 0 (y = " + g6(g.x.y()) + " m)",
+                    {{"grain", i + 1}, {"y", g.x.y()}});
     if (c.kind == ContainerKind::Periodic) {
       g.x.x() = periodic_wrap(g.x.x(), c.size_x);
       if (scene.dimension == 3) g.x.y() = periodic_wrap(g.x.y(), c.size_y);
     }
     for (const DemWall& w : walls)
       if (w.distance(g.x) < 0.0)
-        throw failure(who + " is outside the container: its centre is beyond the " + w.name + " wall by " +
-                      g6(-w.distance(g.x)) + " m");
+        throw failure(FailureKind::OutsideContainer,
+                      who + " is outside the container: its centre is beyond the " + w.name + " wall by " +
+                          g6(-w.distance(g.x)) + " m",
+                      {{"grain", i + 1}, {"wall", w.name}, {"beyond", -w.distance(g.x)}});
   }
   if (!res.velocities.empty()) {
     if (res.velocities.size() != in.size())
-      throw failure("velocities of " + std::to_string(res.velocities.size()) + " grains came back, expected " +
-                    std::to_string(in.size()));
+      throw failure(FailureKind::BadOutput,
+                    "velocities of " + std::to_string(res.velocities.size()) + " grains came back, expected " +
+                        std::to_string(in.size()));
     for (std::size_t i = 0; i < res.velocities.size(); ++i)
       if (kept[i] && !res.velocities[i].allFinite())
-        throw failure("grain " + std::to_string(i + 1) + " has a non-finite velocity");
+        throw failure(FailureKind::NonFinite, "grain " + std::to_string(i + 1) + " has a non-finite velocity",
+                      {{"grain", i + 1}});
   }
   const double bound = kinetic_energy_bound(in, scene);
-  for (const auto& [t, e] : res.kinetic_history)
-    if (!std::isfinite(e) || e > bound)
-      throw failure("kinetic energy grew to " + g6(e) + " J at t = " + g6(t) + " s, above the bound " + g6(bound) +
-                    " J (twice the energy the packing holds): the run blew up");
-  if (res.stop_reason.empty()) throw failure("the engine did not say why it stopped");
+  for (const auto& [t, e] : res.kinetic_history) {
+    if (!std::isfinite(e))
+      throw failure(FailureKind::NonFinite, "kinetic energy " + g6(e) + " J at t = " + g6(t) + " s",
+                    {{"kinetic_energy", json_number(e)}, {"time", json_number(t)}, {"bound", bound}});
+    if (e > bound)
+      throw failure(FailureKind::BlowUp,
+                    "kinetic energy grew to " + g6(e) + " J at t = " + g6(t) + " s, above the bound " + g6(bound) +
+                        " J (twice the energy the packing holds): the run blew up",
+                    {{"kinetic_energy", e}, {"time", json_number(t)}, {"bound", bound}});
+  }
+  if (res.stop_reason.empty()) throw failure(FailureKind::BadOutput, "the engine did not say why it stopped");
 
   // Removed grains leave the outputs: the others keep their order, renumbered 1..N-k.
   std::vector<std::int64_t> new_id(in.size() + 1, 0);
@@ -343,7 +424,8 @@ RelaxResult run_and_read_back(const Packing& packing, const Scene& scene, const 
   std::vector<RelaxResult::Contact> kept_contacts;
   for (const auto& k : res.contacts) {
     if (!new_id[k.i] || (k.j != 0 && !new_id[k.j]))
-      throw failure("a contact names grain " + std::to_string(!new_id[k.i] ? k.i : k.j) + ", which was removed");
+      throw failure(FailureKind::BadOutput,
+                    "a contact names grain " + std::to_string(!new_id[k.i] ? k.i : k.j) + ", which was removed");
     kept_contacts.push_back({new_id[k.i], k.j == 0 ? 0 : new_id[k.j], k.fn});
   }
   res.contacts = std::move(kept_contacts);

@@ -5,7 +5,10 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "btr/scene/scene.h"
 #include "coupling/io/packing_io.h"
@@ -59,11 +62,43 @@ struct RelaxResult {
   } compaction;
 };
 
-// An engine that failed (non-zero exit, lost atoms, NaN, blow-up, grains outside the container):
-// the message says why and carries the last lines of the engine's log.
+// What went wrong in a failed engine run, decided where the failure is detected (the process runner, the
+// engine's read-back, relax.cpp's checks). Each has a stable name (failure_kind_name), the "kind" of
+// OUTDIR/relax_failure.json (docs/faults.md, "Engine failures").
+enum class FailureKind {
+  EngineError,       // "engine_error": could not start, exited non-zero or by a signal, or logged an error
+  TimeLimit,         // "time_limit": killed at the wall-time limit (--time-limit)
+  BlowUp,            // "blow_up": kinetic energy above twice the energy the packing holds
+  NonFinite,         // "non_finite": NaN or infinity in positions, velocities, energies or thermo output
+  LostGrains,        // "lost_grains": grains missing from the result (lost atoms or bodies)
+  OutsideContainer,  // "outside_container": a centre beyond a wall or below the floor, a 2D grain off y = 0
+  MissedContact,     // "missed_contact": two grains sunk into each other (a contact the engine missed)
+  BadOutput,         // "bad_output": an output missing, truncated, malformed or contradicting the run
+};
+
+// "engine_error", "time_limit", "blow_up", "non_finite", "lost_grains", "outside_container",
+// "missed_contact", "bad_output".
+const char* failure_kind_name(FailureKind kind);
+// The kind of one of those names; std::nullopt for any other string.
+std::optional<FailureKind> failure_kind_from_name(const std::string& name);
+
+// An engine that failed (non-zero exit, lost atoms, NaN, blow-up, grains outside the container): the
+// kind, the message (why, and from relax.cpp the last lines of the engine's log) and the numbers the
+// check had (e.g. {"kinetic_energy", "bound", "time"} of a blow-up), as relax_failure.json records them.
 class EngineFailure : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  EngineFailure(FailureKind kind, const std::string& what, nlohmann::json values = nlohmann::json::object())
+      : std::runtime_error(what), kind_(kind), values_(std::move(values)) {}
+  FailureKind kind() const { return kind_; }
+  const nlohmann::json& values() const { return values_; }
+
+ private:
+  FailureKind kind_;
+  nlohmann::json values_;
 };
+
+// The failure record of the last `btr relax` into a folder: written (atomically) when the run fails with
+// an EngineFailure, removed when a run starts, so it never describes an earlier run (relax.cpp).
+constexpr const char* kRelaxFailureFile = "relax_failure.json";
 
 }  // namespace btr

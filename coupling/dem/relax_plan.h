@@ -68,10 +68,15 @@ void write_run_tables(const RelaxResult& res, const std::string& dir);
 
 // Runs the inputs already in dir, reads the result back, checks it (ids, finite values, grains
 // inside the container, bounded kinetic energy) and writes dir/relaxed.{csv,json,vtp},
-// dir/kinetic.csv and dir/contacts.csv. Throws EngineFailure with the tail of the engine's log.
+// dir/kinetic.csv and dir/contacts.csv. Throws EngineFailure with the tail of the engine's log, after
+// writing dir/relax_failure.json (kRelaxFailureFile: kind, engine, message, the check's values, the log's
+// name) atomically; removes that file when it starts, so it is there only after a failed run.
 RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const EngineAdapter& adapter,
                               const std::string& engine, const RelaxSettings& settings, const RelaxPlan& plan,
                               const std::string& dir);
+
+// Removes dir/relax_failure.json, if any: a run into dir starts, so the record of an earlier one goes.
+void clear_failure_record(const std::string& dir);
 
 // Refuses (RelaxRefused) what rigid clusters cannot do in `engine`: they must stay rigid.
 void check_clusters_supported(const Packing& packing, const Scene& scene, const std::string& engine,

@@ -50,6 +50,16 @@ class LiggghtsAdapter : public EngineAdapter {
                         const RelaxPlan& plan) const override {
     return read_liggghts_result(dir, original, scene, plan);
   }
+
+  // LIGGGHTS ends with a non-zero status on its own errors (e.g. "ERROR: Lost atoms"): the log's first
+  // failure line says which.
+  std::optional<EngineFailure> failure_after_exit(const std::string& dir, const Packing&, const Scene&,
+                                                  const RelaxPlan&) const override {
+    const std::string path = log_file(dir);
+    const LiggghtsLog log = parse_liggghts_log(path);
+    if (log.failure.empty()) return std::nullopt;
+    return EngineFailure(log.failure_kind, path + ": " + log.failure, log.failure_values);
+  }
 };
 
 }  // namespace

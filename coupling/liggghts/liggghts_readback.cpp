@@ -28,8 +28,9 @@ bool to_double(const std::string& s, double& v) {
   return !s.empty() && end == s.c_str() + s.size();
 }
 
-[[noreturn]] void fail(const std::string& file, const std::string& what) {
-  throw EngineFailure(file + ": " + what);
+[[noreturn]] void fail(const std::string& file, const std::string& what, FailureKind kind = FailureKind::BadOutput,
+                       const nlohmann::json& values = nlohmann::json::object()) {
+  throw EngineFailure(kind, file + ": " + what, values);
 }
 
 // One snapshot of a LIGGGHTS dump: the column names after "ITEM: ATOMS" / "ITEM: ENTRIES" and the rows.
@@ -65,8 +66,10 @@ Dump read_dump(const std::string& path) {
         std::vector<double> row(f.size());
         for (std::size_t i = 0; i < f.size(); ++i)
           if (!to_double(f[i], row[i]) || !std::isfinite(row[i]))
-            fail(path, "row " + std::to_string(d.rows.size() + 1) + ", column '" + d.columns[i] +
-                           "': expected a finite number, got '" + f[i] + "'");
+            fail(path,
+                 "row " + std::to_string(d.rows.size() + 1) + ", column '" + d.columns[i] +
+                     "': expected a finite number, got '" + f[i] + "'",
+                 to_double(f[i], row[i]) ? FailureKind::NonFinite : FailureKind::BadOutput);
         d.rows.push_back(std::move(row));
       }
       break;
@@ -76,6 +79,37 @@ Dump read_dump(const std::string& path) {
   if (static_cast<long>(d.rows.size()) != expected)
     fail(path, "truncated: " + std::to_string(d.rows.size()) + " rows of " + std::to_string(expected));
   return d;
+}
+
+// The kind and numbers of the log's first failure line: the script's own blow-up guard ("BTR-FAILURE kinetic
+// energy E J above the bound B J at t = T s", liggghts_script.cpp), LIGGGHTS' "ERROR: Lost atoms: original N
+// current M", or any other ERROR (engine_error).
+void classify_failure_line(const std::string& line, LiggghtsLog& log) {
+  const std::vector<std::string> w = split(line);
+  nlohmann::json values = {{"log_line", line}};
+  log.failure_kind = FailureKind::EngineError;
+  auto number_after = [&](const std::string& a, const std::string& b, const char* key) {
+    for (std::size_t i = 0; i + 2 < w.size(); ++i) {
+      double x;
+      if (w[i] == a && w[i + 1] == b && to_double(w[i + 2], x))
+        values[key] = std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr);
+    }
+  };
+  if (line.rfind("BTR-FAILURE kinetic energy ", 0) == 0) {
+    double e = 0.0;
+    const bool parsed = w.size() > 3 && to_double(w[3], e);
+    log.failure_kind = parsed && !std::isfinite(e) ? FailureKind::NonFinite : FailureKind::BlowUp;
+    if (parsed) values["kinetic_energy"] = std::isfinite(e) ? nlohmann::json(e) : nlohmann::json(nullptr);
+    number_after("the", "bound", "bound");
+    number_after("t", "=", "time");
+  } else if (line.find("Lost atoms") != std::string::npos) {
+    log.failure_kind = FailureKind::LostGrains;
+    for (std::size_t i = 0; i + 1 < w.size(); ++i) {
+      double x;
+      if ((w[i] == "original" || w[i] == "current") && to_double(w[i + 1], x)) values[w[i]] = x;
+    }
+  }
+  log.failure_values = std::move(values);
 }
 
 }  // namespace
@@ -124,6 +158,7 @@ LiggghtsLog parse_liggghts_log(const std::string& path) {
     }
     if ((line.rfind("BTR-FAILURE", 0) == 0 || line.find("ERROR") != std::string::npos) && log.failure.empty()) {
       log.failure = line;
+      classify_failure_line(line, log);
       continue;
     }
     if (!in_thermo) continue;
@@ -139,7 +174,11 @@ LiggghtsLog parse_liggghts_log(const std::string& path) {
       continue;
     }
     for (double x : v)
-      if (!std::isfinite(x) && log.failure.empty()) log.failure = "non-finite thermo output: " + line;
+      if (!std::isfinite(x) && log.failure.empty()) {
+        log.failure = "non-finite thermo output: " + line;
+        log.failure_kind = FailureKind::NonFinite;
+        log.failure_values = {{"log_line", line}};
+      }
     if (col_time < 0 || col_ke < 0) continue;
     if (v[0] == last_step) continue;  // each run repeats the previous run's last row
     last_step = v[0];
@@ -153,7 +192,7 @@ RelaxResult read_liggghts_result(const std::string& dir, const Packing& original
   namespace fs = std::filesystem;
   const std::string log_path = (fs::path(dir) / kLiggghtsLog).string();
   const LiggghtsLog log = parse_liggghts_log(log_path);
-  if (!log.failure.empty()) fail(log_path, "the run failed: " + log.failure);
+  if (!log.failure.empty()) fail(log_path, "the run failed: " + log.failure, log.failure_kind, log.failure_values);
   if (log.stop_reason.empty()) fail(log_path, "the run ended without reaching its stop rule (no BTR-STOP line)");
 
   RelaxResult res;
@@ -170,7 +209,8 @@ RelaxResult read_liggghts_result(const std::string& dir, const Packing& original
   const std::string final_path = (fs::path(dir) / kLiggghtsFinalDump).string();
   const Dump atoms = read_dump(final_path);
   if (atoms.rows.size() != n && !(plan.has_region && atoms.rows.size() < n))
-    fail(final_path, "lost atoms: " + std::to_string(atoms.rows.size()) + " grains of " + std::to_string(n));
+    fail(final_path, "lost atoms: " + std::to_string(atoms.rows.size()) + " grains of " + std::to_string(n),
+         FailureKind::LostGrains, {{"grains", n}, {"returned", atoms.rows.size()}});
   const int c_id = atoms.column("id", final_path), c_x = atoms.column("x", final_path),
             c_y = atoms.column("y", final_path), c_z = atoms.column("z", final_path);
   const int c_vx = atoms.column("vx", final_path), c_vy = atoms.column("vy", final_path),

@@ -17,6 +17,8 @@ struct LiggghtsLog {
   double stop_value = std::numeric_limits<double>::quiet_NaN();  // "value = V" of the BTR-STOP line
   double final_unbalanced_force = std::numeric_limits<double>::quiet_NaN();  // BTR-FINAL line
   std::string failure;                             // first ERROR / BTR-FAILURE line, or a non-finite value
+  FailureKind failure_kind = FailureKind::EngineError;  // of that line: blow_up, non_finite, lost_grains, ...
+  nlohmann::json failure_values = nlohmann::json::object();  // its numbers, and the line as "log_line"
   RelaxResult::Compaction compaction;              // the BTR-COMPACTION-END line, if any
 };
 

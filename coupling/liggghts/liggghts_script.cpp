@@ -377,7 +377,7 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   s << "\n# Materials: types 1.." << n_types - 1 << " = species";
   for (const Component& c : scene.grains.components) s << " " << c.species;
   s << " (in this order), type " << types.wall_type << " = walls (material of species "
-    << scene.grains.components.front().species << ").\n"
+    << wall_component(scene).species << ").\n"
     << "# Unlike species: mean restitution and friction; grain-wall: the grain's values.\n";
   s << "fix btr_young all property/global youngsModulus peratomtype"
     << per_type(types, [](const Material& m) { return m.young; }) << "\n";

@@ -70,6 +70,12 @@ class YadeAdapter : public EngineAdapter {
                         const RelaxPlan& plan) const override {
     return yade_read_back(dir, original, scene, plan);
   }
+
+  // The script exits with status 1 after writing a "failed" status with its failure_kind.
+  std::optional<EngineFailure> failure_after_exit(const std::string& dir, const Packing& original, const Scene& scene,
+                                                  const RelaxPlan&) const override {
+    return yade_failure_after_exit(dir, original, scene);
+  }
 };
 
 }  // namespace

@@ -21,7 +21,9 @@ LOG_FILE = "yade.log"
 
 
 class RunFailure(Exception):
-    pass
+    def __init__(self, message, kind="engine_error"):  # kind: a FailureKind name (coupling/dem/relax.h)
+        Exception.__init__(self, message)
+        self.kind = kind
 
 
 def path(name):
@@ -302,10 +304,10 @@ def write_outputs():
     write_atomically(CONTACTS_FILE, "\n".join(lines) + "\n")
 
 
-def write_status(status, reason, message, wall):
+def write_status(status, reason, message, wall, kind=None):
     steps = O.iter
     write_atomically(STATUS_FILE, json.dumps({
-        "status": status, "stop_reason": reason, "message": message,
+        "status": status, "stop_reason": reason, "message": message, "failure_kind": kind,
         "time": O.time, "steps": steps, "timestep": O.dt, "wall_seconds": wall,
         "steps_per_second": steps / wall if wall > 0 else 0.0,
         "loop_seconds": _loop_seconds,
@@ -515,9 +517,9 @@ class StopRule:
         if not math.isfinite(e) or e > KINETIC_BOUND:
             _history.append((t, e))
             if not math.isfinite(e):
-                raise RunFailure("kinetic energy is %r at t = %.6g s (step %d)" % (e, t, step))
+                raise RunFailure("kinetic energy is %r at t = %.6g s (step %d)" % (e, t, step), "non_finite")
             raise RunFailure("blow-up: kinetic energy %.6g J above the bound %.6g J (twice the energy the packing "
-                             "holds) at t = %.6g s (step %d)" % (e, KINETIC_BOUND, t, step))
+                             "holds) at t = %.6g s (step %d)" % (e, KINETIC_BOUND, t, step), "blow_up")
         if self.compaction.active:
             if (self.compaction.samples + 1) % (STEPS_PER_CHECK // AVERAGE_EVERY) == 0:
                 _history.append((t, e))
@@ -538,7 +540,7 @@ class StopRule:
             return
         self.checks += 1
         if not math.isfinite(mean):
-            raise RunFailure("mean kinetic energy is %r at t = %.6g s (step %d)" % (mean, t, step))
+            raise RunFailure("mean kinetic energy is %r at t = %.6g s (step %d)" % (mean, t, step), "non_finite")
         removed = remove_escaped()
         if removed:
             log("t = %.6g s: %d grain(s) left the open floor's region and were removed (%d in all)" % (
@@ -546,7 +548,8 @@ class StopRule:
         # len(O.bodies) keeps counting erased slots: count the bodies themselves once grains were removed.
         present = len(O.bodies) if not _removed else sum(1 for b in O.bodies if b is not None)
         if present != self.bodies - len(_removed):
-            raise RunFailure("bodies were lost: %d left of %d (%d removed)" % (present, self.bodies, len(_removed)))
+            raise RunFailure("bodies were lost: %d left of %d (%d removed)" % (present, self.bodies, len(_removed)),
+                             "lost_grains")
         if mean >= KINETIC_THRESHOLD:
             self.armed = True
         ready = self.armed or t >= self.arming_time if STOP_RULE == "kinetic-energy" else t >= self.arming_time
@@ -671,7 +674,8 @@ def main():
             if O.bodies[bid] is None:
                 continue
             if O.bodies[bid].state.pos[2] < 0.0:
-                raise RunFailure("grain %d fell through the floor (z = %.6g m)" % (gid, O.bodies[bid].state.pos[2]))
+                raise RunFailure("grain %d fell through the floor (z = %.6g m)" % (gid, O.bodies[bid].state.pos[2]),
+                                 "outside_container")
         write_outputs()
         wall = time.time() - t0
         log("unbalanced force at the end: %s; %d grain(s) removed" % (_final_unbalanced, len(_removed)))
@@ -685,5 +689,5 @@ def main():
         log("FAILED: " + message)  # last, so that the tail of the log names the failure
         if _history:
             write_history()
-        write_status("failed", "", message, time.time() - t0)
+        write_status("failed", "", message, time.time() - t0, exc.kind if isinstance(exc, RunFailure) else "engine_error")
         return 1

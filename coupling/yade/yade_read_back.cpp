@@ -6,10 +6,12 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include "coupling/dem/dem_walls.h"
 #include "coupling/dem/overlap.h"
+#include "coupling/dem/relax_plan.h"
 #include "coupling/yade/yade_script.h"
 
 namespace btr {
@@ -22,7 +24,10 @@ class Reader {
   explicit Reader(std::string dir) : dir_(std::move(dir)) {}
 
   // relax.cpp adds the tail of the log to the message.
-  [[noreturn]] void fail(const std::string& what) const { throw EngineFailure("YADE run in " + dir_ + ": " + what); }
+  [[noreturn]] void fail(const std::string& what, FailureKind kind = FailureKind::BadOutput,
+                         const nlohmann::json& values = nlohmann::json::object()) const {
+    throw EngineFailure(kind, "YADE run in " + dir_ + ": " + what, values);
+  }
 
   // Rows of numbers of a CSV output with exactly this header.
   std::vector<std::vector<double>> csv(const char* name, const std::string& header) const {
@@ -43,7 +48,8 @@ class Reader {
         char* end = nullptr;
         const double v = std::strtod(cell.c_str(), &end);
         if (cell.empty() || *end != '\0') fail(p.string() + " line " + std::to_string(n) + ": \"" + cell + "\" is not a number");
-        if (!std::isfinite(v)) fail(p.string() + " line " + std::to_string(n) + ": non-finite value " + cell);
+        if (!std::isfinite(v))
+          fail(p.string() + " line " + std::to_string(n) + ": non-finite value " + cell, FailureKind::NonFinite);
         row.push_back(v);
       }
       if (row.size() != columns)
@@ -91,14 +97,57 @@ std::string outside(const std::vector<DemWall>& walls, int dimension, const Vec3
 // the law could hold: the engine missed the contact and one grain went into the other.
 constexpr double kMissedContactOverlap = 0.5;
 
+// The last (time, kinetic energy) row of the script's kinetic history, read leniently (a failed run may
+// end on "nan"); std::nullopt if there is none.
+std::optional<std::pair<double, double>> last_kinetic_row(const std::string& dir) {
+  std::ifstream f(fs::path(dir) / yade_files::kKinetic);
+  std::string line, last;
+  while (std::getline(f, line))
+    if (!line.empty() && line.rfind("time", 0) != 0) last = line;
+  const std::size_t comma = last.find(',');
+  if (comma == std::string::npos) return std::nullopt;
+  char* end = nullptr;
+  const double t = std::strtod(last.c_str(), &end);
+  const double e = std::strtod(last.c_str() + comma + 1, &end);
+  return std::make_pair(t, e);
+}
+
 }  // namespace
+
+EngineFailure yade_status_failure(const std::string& dir, const nlohmann::json& status, const Packing& original,
+                                  const Scene& scene) {
+  const std::string kind_name = status.value("failure_kind", "");
+  const FailureKind kind = failure_kind_from_name(kind_name).value_or(FailureKind::EngineError);
+  nlohmann::json values = nlohmann::json::object();
+  if (kind == FailureKind::BlowUp || kind == FailureKind::NonFinite) {
+    if (const auto row = last_kinetic_row(dir)) {
+      values["time"] = std::isfinite(row->first) ? nlohmann::json(row->first) : nlohmann::json(nullptr);
+      values["kinetic_energy"] = std::isfinite(row->second) ? nlohmann::json(row->second) : nlohmann::json(nullptr);
+    }
+    values["bound"] = kinetic_energy_bound(original.grains, scene);
+  }
+  if (status.contains("time") && status["time"].is_number()) values["engine_time"] = status["time"];
+  if (status.contains("steps") && status["steps"].is_number()) values["steps"] = status["steps"];
+  return EngineFailure(kind, "YADE run in " + dir + ": the script reports status \"" + status.value("status", "") +
+                                 "\": " + status.value("message", "(no message)"),
+                       values);
+}
+
+std::optional<EngineFailure> yade_failure_after_exit(const std::string& dir, const Packing& original,
+                                                     const Scene& scene) {
+  std::ifstream f(fs::path(dir) / yade_files::kStatus);
+  if (!f) return std::nullopt;
+  const nlohmann::json st = nlohmann::json::parse(f, nullptr, false);
+  if (!st.is_object() || st.value("status", "") == "ok") return std::nullopt;
+  return yade_status_failure(dir, st, original, scene);
+}
 
 RelaxResult yade_read_back(const std::string& dir, const Packing& original, const Scene& scene,
                            const RelaxPlan& plan) {
   const Reader in(dir);
   const nlohmann::json st = in.status();
   const std::string status = st.value("status", "");
-  if (status != "ok") in.fail("the script reports status \"" + status + "\": " + st.value("message", "(no message)"));
+  if (status != "ok") throw yade_status_failure(dir, st, original, scene);
   const std::string reason = st.value("stop_reason", "");
   if (reason != "max-time" && reason != plan.stop_rule)
     in.fail("stop reason \"" + reason + "\" in " + yade_files::kStatus + " is neither the scene's rule \"" + plan.stop_rule +
@@ -117,7 +166,8 @@ RelaxResult yade_read_back(const std::string& dir, const Packing& original, cons
       const std::int64_t id = v.is_number_integer() ? v.get<std::int64_t>() : 0;
       if (id < 1 || id > static_cast<std::int64_t>(n) || removed[id - 1])
         in.fail("removed grain " + v.dump() + " in " + yade_files::kStatus + " is unknown or repeated");
-      if (!plan.has_region) in.fail("grains were removed, but only an open floor removes grains");
+      if (!plan.has_region)
+        in.fail("grains were removed, but only an open floor removes grains", FailureKind::LostGrains);
       removed[id - 1] = 1;
       result.removed.push_back(id);
     }
@@ -142,7 +192,8 @@ RelaxResult yade_read_back(const std::string& dir, const Packing& original, cons
   const std::vector<DemWall> walls = dem_walls(scene.container, scene.dimension);
   if (rows.size() != n - result.removed.size())
     in.fail("lost grains: " + std::string(yade_files::kFinal) + " has " + std::to_string(rows.size()) +
-            " grains, the packing " + std::to_string(n) + " (" + std::to_string(result.removed.size()) + " removed)");
+                " grains, the packing " + std::to_string(n) + " (" + std::to_string(result.removed.size()) + " removed)",
+            FailureKind::LostGrains, {{"grains", n}, {"returned", rows.size()}, {"removed", result.removed.size()}});
   result.relaxed.grains = original.grains;
   result.velocities.assign(n, Vec3::Zero());
   double max_speed = 0.0;
@@ -155,7 +206,9 @@ RelaxResult yade_read_back(const std::string& dir, const Packing& original, cons
               ", expected " + std::to_string(i + 1));
     const Vec3 x(r[1], r[2], r[3]);
     const std::string why = outside(walls, scene.dimension, x);
-    if (!why.empty()) in.fail("grain " + std::to_string(i + 1) + " left the container: " + why);
+    if (!why.empty())
+      in.fail("grain " + std::to_string(i + 1) + " left the container: " + why, FailureKind::OutsideContainer,
+              {{"grain", i + 1}});
     result.relaxed.grains[i].x = x;
     result.velocities[i] = Vec3(r[4], r[5], r[6]);
     max_speed = std::max(max_speed, result.velocities[i].norm());
@@ -166,7 +219,8 @@ RelaxResult yade_read_back(const std::string& dir, const Packing& original, cons
     if (!removed[i]) present.push_back(result.relaxed.grains[i]);
   const OverlapReport overlap = largest_overlap(present, scene.dimension, scene.container);
   if (overlap.largest > kMissedContactOverlap)
-    in.fail("grains went into each other: overlap " + overlap.describe() + " (YADE missed the contact)");
+    in.fail("grains went into each other: overlap " + overlap.describe() + " (YADE missed the contact)",
+            FailureKind::MissedContact, {{"largest_overlap", overlap.largest}});
 
   for (const auto& r : in.csv(yade_files::kKinetic, "time,kinetic_energy")) result.kinetic_history.emplace_back(r[0], r[1]);
   if (result.kinetic_history.empty()) in.fail(std::string(yade_files::kKinetic) + " is empty");

@@ -323,10 +323,10 @@ std::string yade_script(const Packing& packing, const Scene& scene, const RelaxP
     out << "    add_material(" << py_string(label(c)) << ", young=" << num(young_of(c))
         << ", poisson=" << num(hooke ? 1.0 : c.material.poisson) << ", density=" << num(c.density)
         << ", species=" << c.species << ")\n";
-  const Component& first = comps.front();
-  out << "    add_material(\"walls\", young=" << num(young_of(first) * wall_young_factor(hooke))
-      << ", poisson=" << num(hooke ? 1.0 : first.material.poisson) << ", density=" << num(first.density)
-      << ")  # species " << first.species << "'s material, stiffer (YADE sees a wall as a sphere)\n";
+  const Component& wall = wall_component(scene);
+  out << "    add_material(\"walls\", young=" << num(young_of(wall) * wall_young_factor(hooke))
+      << ", poisson=" << num(hooke ? 1.0 : wall.material.poisson) << ", density=" << num(wall.density)
+      << ")  # species " << wall.species << "'s material, stiffer (YADE sees a wall as a sphere)\n";
   for (std::size_t a = 0; a < comps.size(); ++a) {
     for (std::size_t b = a; b < comps.size(); ++b) {
       const Material p = pair_material(comps[a].material, comps[b].material);

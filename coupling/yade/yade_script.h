@@ -1,7 +1,10 @@
 #pragma once
 // The YADE half of the coupling (coupling/yade/yade_adapter.cpp): the batch script that relaxes a packing and the
 // files it reads and writes, all inside one run folder.
+#include <optional>
 #include <string>
+
+#include <nlohmann/json.hpp>
 
 #include "coupling/dem/engine_adapter.h"
 
@@ -31,5 +34,15 @@ std::string yade_script(const Packing& packing, const Scene& scene, const RelaxP
 // Reads the outputs of a run in dir (see EngineAdapter::read_back).
 RelaxResult yade_read_back(const std::string& dir, const Packing& original, const Scene& scene,
                            const RelaxPlan& plan);
+
+// The failure a status file that is not "ok" reports: its kind is the script's "failure_kind" (the name
+// of a FailureKind; engine_error if absent or unknown), its message the script's; a blow-up or a non-finite
+// energy gets the last row of the kinetic history and the bound as values.
+EngineFailure yade_status_failure(const std::string& dir, const nlohmann::json& status, const Packing& original,
+                                  const Scene& scene);
+
+// After a non-zero exit: the failure dir's status file reports, or std::nullopt if it reports none.
+std::optional<EngineFailure> yade_failure_after_exit(const std::string& dir, const Packing& original,
+                                                     const Scene& scene);
 
 }  // namespace btr

@@ -224,8 +224,10 @@ TEST(Liggghts, RestitutionOutsideLiggghtsRangeRefused) {
 
 namespace {
 
-// Writes the inputs for a small packing, lets `edit` break the script, runs them.
-void run_broken(const std::string& name, const std::function<std::string(std::string)>& edit, std::string& message) {
+// Writes the inputs for a small packing, lets `edit` break the script, runs them; the failure's message,
+// and the run folder's relax_failure.json as `record`.
+void run_broken(const std::string& name, const std::function<std::string(std::string)>& edit, std::string& message,
+                nlohmann::json* record = nullptr) {
   const btr::Scene scene = btr_test::make_scene(name, 3, container(ContainerKind::Box, 0.02, 0.02));
   const btr::Packing p = btr_test::layered_packing(scene, 100, 9);
   const std::string dir = btr_test::fresh_dir(name);
@@ -240,6 +242,11 @@ void run_broken(const std::string& name, const std::function<std::string(std::st
     ADD_FAILURE() << "the broken run was accepted";
   } catch (const btr::EngineFailure& e) {
     message = e.what();
+    const nlohmann::json r = nlohmann::json::parse(read_text(dir + "/" + btr::kRelaxFailureFile));
+    EXPECT_EQ(r["kind"], btr::failure_kind_name(e.kind()));
+    EXPECT_EQ(r["engine"], "liggghts");
+    EXPECT_EQ(r["log"], "log.liggghts");
+    if (record) *record = r;
   }
   EXPECT_FALSE(fs::exists(dir + "/relaxed.csv")) << "a failed run is never a result";
 }
@@ -256,27 +263,38 @@ std::string replace_line(std::string s, const std::string& prefix, const std::st
 TEST(Liggghts, BrokenInputIsReportedWithItsLog) {
   if (!have_liggghts()) FAIL() << "scripts/setup.sh installs it: " << "liggghts not on PATH";
   std::string msg;
+  nlohmann::json record;
   run_broken("broken", [](std::string s) { return replace_line(s, "pair_style", "pair_style gran model nonsense"); },
-             msg);
+             msg, &record);
   EXPECT_NE(msg.find("exit status"), std::string::npos) << msg;
   EXPECT_NE(msg.find("last lines of"), std::string::npos) << msg;
   EXPECT_NE(msg.find("ERROR"), std::string::npos) << msg;  // LIGGGHTS' own error line, from its log
+  EXPECT_EQ(record["kind"], "engine_error") << record.dump();
+  EXPECT_NE(record["values"]["log_line"].get<std::string>().find("ERROR"), std::string::npos) << record.dump();
+  EXPECT_NE(record["values"]["exit_status"].get<int>(), 0);
 }
 
 TEST(Liggghts, LostAtomsAreAFailure) {
   if (!have_liggghts()) FAIL() << "scripts/setup.sh installs it: " << "liggghts not on PATH";
   std::string msg;
+  nlohmann::json record;
   // The floor moved 1 m down (the checks still read its forces): grains fall out of the box.
   run_broken("lost", [](std::string s) {
     const std::size_t at = s.find(" zplane 0 store_force");
     return at == std::string::npos ? s : s.replace(at, 8, " zplane -1");
-  }, msg);
+  }, msg, &record);
   EXPECT_NE(msg.find("Lost atoms"), std::string::npos) << msg;
+  EXPECT_EQ(record["kind"], "lost_grains") << record.dump();
+  // LIGGGHTS' own counts, as its error line gives them (it stops at the first check that finds atoms missing).
+  EXPECT_GT(record["values"]["original"].get<double>(), 0.0) << record.dump();
+  EXPECT_TRUE(record["values"]["current"].is_number()) << record.dump();
+  EXPECT_EQ(record["values"]["exit_status"], 1) << record.dump();
 }
 
 TEST(Liggghts, BlowUpIsAFailure) {
   if (!have_liggghts()) FAIL() << "scripts/setup.sh installs it: " << "liggghts not on PATH";
   std::string msg;
+  nlohmann::json record;
   // 40 times the stable step: Hertz contacts gain energy at every collision.
   run_broken("blowup",
              [](std::string s) {
@@ -285,10 +303,13 @@ TEST(Liggghts, BlowUpIsAFailure) {
                const double dt = std::stod(s.substr(at + 17, end - at - 17));
                return replace_line(s, "timestep", "timestep " + std::to_string(40 * dt));
              },
-             msg);
+             msg, &record);
   EXPECT_TRUE(msg.find("kinetic energy") != std::string::npos || msg.find("Lost atoms") != std::string::npos ||
               msg.find("outside the container") != std::string::npos)
       << msg;
+  const std::string kind = record["kind"];
+  EXPECT_TRUE(kind == "blow_up" || kind == "lost_grains" || kind == "outside_container" || kind == "non_finite")
+      << record.dump();
 }
 
 // LIGGGHTS' own estimate (fix check/timestep/gran) agrees with our Rayleigh time for glass.
@@ -331,9 +352,15 @@ TEST(Liggghts, RayleighTimeAgreesWithLiggghtsCheck) {
 TEST(Liggghts, KineticBoundInTheScriptEndsTheRun) {
   if (!have_liggghts()) FAIL() << "scripts/setup.sh installs it: " << "liggghts not on PATH";
   std::string msg;
+  nlohmann::json record;
   run_broken("bound", [](std::string s) { return replace_line(s, "variable btr_bound", "variable btr_bound equal 1e-30"); },
-             msg);
+             msg, &record);
   EXPECT_NE(msg.find("BTR-FAILURE kinetic energy"), std::string::npos) << msg;
+  // The script's guard line gives the kind and its numbers.
+  EXPECT_EQ(record["kind"], "blow_up") << record.dump();
+  EXPECT_EQ(record["values"]["bound"].get<double>(), 1e-30) << record.dump();
+  EXPECT_GT(record["values"]["kinetic_energy"].get<double>(), 1e-30) << record.dump();
+  EXPECT_GT(record["values"]["time"].get<double>(), 0.0) << record.dump();
 }
 
 // Real BTR packings (the project's own engine on the project's scenes) relax to the stop rule too.

@@ -12,6 +12,7 @@
 
 #include "btr/placement/run_scene.h"
 #include "btr/scene/scene_toml.h"
+#include "coupling/dem/materials.h"
 #include "coupling/dem/overlap.h"
 #include "coupling/dem/preload.h"
 #include "coupling/dem/relax.h"
@@ -69,6 +70,57 @@ TEST(Preload, LawOverlapIsHertzOrHookeByHand) {
   s.relax.model = "hooke";
   EXPECT_NEAR(btr::law_overlap(g, s, 2, 1, 2 * f), 2 * btr::law_overlap(g, s, 2, 1, f), 1e-15);
   EXPECT_NE(btr::law_overlap(g, s, 2, 1, f), hertz_overlap(f, kR / 2));
+}
+
+// `btr relax --predict-overlap`: one grain on the floor, by hand: delta = (3 m g / (4 E* sqrt(R)))^(2/3) with
+// 1/E* = (1 - nu_grain^2)/E_grain + (1 - nu_wall^2)/E_wall, the wall of the first component's material.
+TEST(Preload, PredictedStaticOverlapIsHertzByHand) {
+  btr::Scene s = column_scene();
+  const double young = 5e7, poisson = 0.3, m = 2500.0 * 4.0 / 3.0 * M_PI * kR * kR * kR;
+  ASSERT_EQ(s.grains.components[0].material.young, young);
+  ASSERT_EQ(s.grains.components[0].material.poisson, poisson);
+  const double e_star = 1.0 / ((1 - poisson * poisson) / young + (1 - poisson * poisson) / young);
+  const double delta = std::pow(3.0 * m * 9.81 / (4.0 * e_star * std::sqrt(kR)), 2.0 / 3.0);
+  const btr::StaticOverlap one = btr::predict_static_overlap(columns(1, 1), s);
+  EXPECT_EQ(one.law, "hertz");
+  EXPECT_EQ(one.floor_grains, 1);
+  EXPECT_NEAR(one.single.mean_relative, delta / kR, 1e-12 * delta / kR);
+  EXPECT_NEAR(one.single.mean_depth, delta, 1e-12 * delta);
+  EXPECT_EQ(one.single.largest_relative, one.single.mean_relative);
+  EXPECT_EQ(one.column.mean_relative, one.single.mean_relative);  // alone, its column is itself
+
+  // Two columns of three: two grains on the floor share 6 weights, 3 m g each: delta grows by 3^(2/3).
+  const btr::StaticOverlap cols = btr::predict_static_overlap(columns(2, 3), s);
+  EXPECT_EQ(cols.floor_grains, 2);
+  EXPECT_NEAR(cols.column_force, 3.0 * m * 9.81, 1e-12 * m * 9.81);
+  EXPECT_NEAR(cols.column.mean_relative, std::pow(3.0, 2.0 / 3.0) * delta / kR, 1e-12 * delta / kR);
+  EXPECT_NEAR(cols.single.mean_relative, delta / kR, 1e-12 * delta / kR);
+
+  // The walls take the first component's material (materials.h, wall_component): a grain of a stiffer second
+  // species meets a floor of the first's.
+  btr::Scene two = s;
+  btr::Component hard = two.grains.components[0];
+  hard.species = 2;
+  hard.material.young = 2e11;
+  hard.material.poisson = 0.2;
+  two.grains.components.push_back(hard);
+  EXPECT_EQ(&btr::wall_material(two), &two.grains.components[0].material);
+  btr::Grains g = columns(1, 1);
+  g[0].species = 2;
+  const double e_mixed = 1.0 / ((1 - 0.2 * 0.2) / 2e11 + (1 - poisson * poisson) / young);
+  EXPECT_NEAR(btr::predict_static_overlap(g, two).single.mean_depth,
+              std::pow(3.0 * m * 9.81 / (4.0 * e_mixed * std::sqrt(kR)), 2.0 / 3.0), 1e-12 * delta);
+
+  // Explicit stiffness: F = kn delta (a wall contact takes the grain's kn).
+  s.relax.model = "hooke-stiffness";
+  s.grains.components[0].material.kn = 2e3;
+  EXPECT_NEAR(btr::predict_static_overlap(columns(1, 1), s).single.mean_depth, m * 9.81 / 2e3, 1e-15);
+
+  // Nothing touches the floor (a bed lifted by 10 radii): the lowest grains are taken.
+  btr::Grains lifted = columns(2, 3);
+  for (btr::Grain& q : lifted) q.x.z() += 10 * kR;
+  s.relax.model = "hertz";
+  EXPECT_EQ(btr::predict_static_overlap(lifted, s).floor_grains, 2);
 }
 
 // A column of 4 spheres: contact k (from the floor, k = 0..3) carries (4 - k) W, so grain k sits

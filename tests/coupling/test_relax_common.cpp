@@ -6,6 +6,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <optional>
 #include <sstream>
 
 #include "coupling/dem/overlap.h"
@@ -211,6 +213,8 @@ class FakeAdapter : public btr::EngineAdapter {
  public:
   std::string shell = "echo 'all good' > fake.log";
   std::function<btr::RelaxResult(const btr::Packing&)> result;
+  // What the engine's own outputs report after a non-zero exit (none unless set).
+  std::function<std::optional<btr::EngineFailure>()> after_exit;
 
   std::vector<std::string> write_inputs(const btr::Packing&, const btr::Scene&, const btr::RelaxSettings&,
                                         const btr::RelaxPlan&, const std::string& dir) const override {
@@ -226,6 +230,10 @@ class FakeAdapter : public btr::EngineAdapter {
   btr::RelaxResult read_back(const std::string&, const btr::Packing& original, const btr::Scene&,
                              const btr::RelaxPlan&) const override {
     return result(original);
+  }
+  std::optional<btr::EngineFailure> failure_after_exit(const std::string&, const btr::Packing&, const btr::Scene&,
+                                                       const btr::RelaxPlan&) const override {
+    return after_exit ? after_exit() : std::nullopt;
   }
 };
 
@@ -253,11 +261,25 @@ struct FakeRun {
     btr::write_engine_inputs(packing, scene, adapter, settings, plan, dir);
     return btr::run_engine_inputs(packing, scene, adapter, "fake", settings, plan, dir);
   }
-  std::string failure() {
+  nlohmann::json record;  // the relax_failure.json of the last failure()
+  // Runs, expects an EngineFailure of this kind, reads its relax_failure.json into `record`; returns the message.
+  std::string failure(btr::FailureKind kind) {
+    const bool earlier_result = fs::exists(dir + "/relaxed.csv");  // an earlier run's, into the same folder
     try {
       run();
     } catch (const btr::EngineFailure& e) {
-      EXPECT_FALSE(fs::exists(dir + "/relaxed.csv")) << "a failed run is never a result";
+      if (!earlier_result) {
+        EXPECT_FALSE(fs::exists(dir + "/relaxed.csv")) << "a failed run is never a result";
+      }
+      EXPECT_EQ(btr::failure_kind_name(e.kind()), std::string(btr::failure_kind_name(kind))) << e.what();
+      record = nlohmann::json::parse(read_text(dir + "/" + btr::kRelaxFailureFile));
+      EXPECT_EQ(record["kind"], btr::failure_kind_name(kind));
+      EXPECT_EQ(record["engine"], "fake");
+      EXPECT_EQ(record["log"], "fake.log");
+      EXPECT_EQ(record["values"], e.values());
+      // The record's message is why, without the log tails the exception's message carries.
+      EXPECT_NE(std::string(e.what()).find(record["message"].get<std::string>()), std::string::npos);
+      EXPECT_EQ(record["message"].get<std::string>().find("last lines of"), std::string::npos);
       return e.what();
     }
     ADD_FAILURE() << "the run was accepted";
@@ -309,16 +331,47 @@ TEST(RelaxChecks, FinalOverlapsInRelaxedJson) {
 TEST(RelaxChecks, FailedCommandCarriesTheLogTail) {
   FakeRun f("fake_exit");
   f.adapter.shell = "echo 'ERROR: boom at step 12' > fake.log; exit 2";
-  const std::string msg = f.failure();
+  const std::string msg = f.failure(btr::FailureKind::EngineError);
   EXPECT_NE(msg.find("exit status 2"), std::string::npos) << msg;
   EXPECT_NE(msg.find("ERROR: boom at step 12"), std::string::npos) << msg;
+  EXPECT_EQ(f.record["values"]["exit_status"], 2);
+}
+
+// After a non-zero exit the engine's own outputs decide the kind, and their numbers join the exit status.
+TEST(RelaxChecks, KindReportedByTheEngineAfterItsExit) {
+  FakeRun f("fake_exit_reported");
+  f.adapter.shell = "echo 'ERROR: Lost atoms: original 60 current 58' > fake.log; exit 1";
+  f.adapter.after_exit = [] {
+    return btr::EngineFailure(btr::FailureKind::LostGrains, "fake.log: the run failed: ERROR: Lost atoms",
+                              {{"original", 60}, {"current", 58}});
+  };
+  const std::string msg = f.failure(btr::FailureKind::LostGrains);
+  EXPECT_NE(msg.find("exit status 1: fake.log: the run failed: ERROR: Lost atoms"), std::string::npos) << msg;
+  EXPECT_EQ(f.record["values"]["exit_status"], 1);
+  EXPECT_EQ(f.record["values"]["original"], 60);
+  EXPECT_EQ(f.record["values"]["current"], 58);
+}
+
+TEST(RelaxChecks, FailureKindNamesAreStable) {
+  const std::pair<btr::FailureKind, const char*> names[] = {
+      {btr::FailureKind::EngineError, "engine_error"},   {btr::FailureKind::TimeLimit, "time_limit"},
+      {btr::FailureKind::BlowUp, "blow_up"},             {btr::FailureKind::NonFinite, "non_finite"},
+      {btr::FailureKind::LostGrains, "lost_grains"},     {btr::FailureKind::OutsideContainer, "outside_container"},
+      {btr::FailureKind::MissedContact, "missed_contact"}, {btr::FailureKind::BadOutput, "bad_output"}};
+  for (const auto& [kind, name] : names) {
+    EXPECT_STREQ(btr::failure_kind_name(kind), name);
+    EXPECT_EQ(btr::failure_kind_from_name(name), kind);
+  }
+  EXPECT_FALSE(btr::failure_kind_from_name("blew up").has_value());
 }
 
 TEST(RelaxChecks, WallTimeLimit) {
   FakeRun f("fake_slow");
   f.adapter.shell = "sleep 30";
   f.settings.wall_time_limit = 0.5;
-  EXPECT_NE(f.failure().find("wall-time limit"), std::string::npos);
+  EXPECT_NE(f.failure(btr::FailureKind::TimeLimit).find("wall-time limit"), std::string::npos);
+  EXPECT_EQ(f.record["values"]["time_limit"], 0.5);
+  EXPECT_GE(f.record["values"]["wall_seconds"].get<double>(), 0.5);
 }
 
 TEST(RelaxChecks, GrainOutsideTheContainer) {
@@ -328,8 +381,10 @@ TEST(RelaxChecks, GrainOutsideTheContainer) {
     r.relaxed.grains[5].x.z() = -1e-4;
     return r;
   };
-  const std::string msg = f.failure();
+  const std::string msg = f.failure(btr::FailureKind::OutsideContainer);
   EXPECT_NE(msg.find("grain 6 is outside the container"), std::string::npos) << msg;
+  EXPECT_EQ(f.record["values"]["grain"], 6);
+  EXPECT_EQ(f.record["values"]["wall"], "floor");
 }
 
 TEST(RelaxChecks, KineticEnergyBlowUp) {
@@ -344,8 +399,11 @@ TEST(RelaxChecks, KineticEnergyBlowUp) {
     r.kinetic_history.push_back({0.2, 3 * bound});
     return r;
   };
-  const std::string msg = f.failure();
+  const std::string msg = f.failure(btr::FailureKind::BlowUp);
   EXPECT_NE(msg.find("blew up"), std::string::npos) << msg;
+  EXPECT_EQ(f.record["values"]["kinetic_energy"].get<double>(), 3 * bound);
+  EXPECT_EQ(f.record["values"]["bound"].get<double>(), bound);
+  EXPECT_EQ(f.record["values"]["time"].get<double>(), 0.2);
 }
 
 TEST(RelaxChecks, LostGrainsAndNonFiniteValues) {
@@ -355,12 +413,64 @@ TEST(RelaxChecks, LostGrainsAndNonFiniteValues) {
     r.relaxed.grains.pop_back();
     return r;
   };
-  EXPECT_NE(f.failure().find("lost grains"), std::string::npos);
+  EXPECT_NE(f.failure(btr::FailureKind::LostGrains).find("lost grains"), std::string::npos);
+  EXPECT_EQ(f.record["values"]["grains"], f.packing.grains.size());
+  EXPECT_EQ(f.record["values"]["returned"], f.packing.grains.size() - 1);
   FakeRun g("fake_nan");
   g.adapter.result = [inner = g.adapter.result](const btr::Packing& p) {
     btr::RelaxResult r = inner(p);
     r.relaxed.grains[3].x.x() = std::nan("");
     return r;
   };
-  EXPECT_NE(g.failure().find("grain 4 has a non-finite position"), std::string::npos);
+  EXPECT_NE(g.failure(btr::FailureKind::NonFinite).find("grain 4 has a non-finite position"), std::string::npos);
+  FakeRun h("fake_nan_energy");
+  h.adapter.result = [inner = h.adapter.result](const btr::Packing& p) {
+    btr::RelaxResult r = inner(p);
+    r.kinetic_history.push_back({0.2, std::nan("")});
+    return r;
+  };
+  EXPECT_NE(h.failure(btr::FailureKind::NonFinite).find("kinetic energy nan"), std::string::npos);
+  EXPECT_TRUE(h.record["values"]["kinetic_energy"].is_null()) << "JSON has no NaN: null";
+}
+
+// relax_failure.json is renamed into place (a reader never sees half a record; a link to the old file keeps
+// the old bytes), is there exactly after a failed run, and never outlives the run it describes: a successful
+// run and a refused one into the same folder remove it.
+TEST(RelaxChecks, FailureRecordIsAtomicAndNeverStale) {
+  FakeRun f("fake_record");
+  const std::string record = f.dir + "/" + btr::kRelaxFailureFile;
+  const std::string stale = R"({"kind": "blow_up", "engine": "earlier"})";
+  std::ofstream(record) << stale;
+  fs::create_hard_link(record, f.dir + "/earlier_record.json");
+  f.adapter.result = [inner = f.adapter.result](const btr::Packing& p) {
+    btr::RelaxResult r = inner(p);
+    r.relaxed.grains.pop_back();
+    return r;
+  };
+  f.failure(btr::FailureKind::LostGrains);
+  EXPECT_EQ(read_text(f.dir + "/earlier_record.json"), stale) << "the record was rewritten in place";
+  EXPECT_EQ(f.record["kind"], "lost_grains");
+  for (const auto& e : fs::directory_iterator(f.dir))
+    EXPECT_NE(e.path().extension(), ".tmp") << "a temporary file was left: " << e.path();
+
+  // A successful run into the same folder removes it.
+  f.adapter.result = FakeRun("fake_record_ok").adapter.result;
+  f.run();
+  EXPECT_FALSE(fs::exists(record)) << "a successful run left an earlier run's failure record";
+  EXPECT_TRUE(fs::exists(f.dir + "/relaxed.json"));
+
+  // A failure after a failure replaces it with its own.
+  f.adapter.shell = "sleep 30";
+  f.settings.wall_time_limit = 0.2;
+  f.failure(btr::FailureKind::TimeLimit);
+  f.adapter.shell = "exit 3";
+  f.failure(btr::FailureKind::EngineError);
+  EXPECT_EQ(f.record["values"]["exit_status"], 3);
+  EXPECT_FALSE(f.record["values"].contains("time_limit"));
+
+  // A run refused before any engine starts (an overlap above --max-overlap) removes it too.
+  btr::Packing overlapping = f.packing;
+  overlapping.grains[1].x = overlapping.grains[0].x + btr::Vec3(overlapping.grains[0].r, 0, 0);
+  EXPECT_THROW(btr::relax(overlapping, f.scene, "liggghts", {}, f.dir), btr::RelaxRefused);
+  EXPECT_FALSE(fs::exists(record)) << "a refused run left an earlier run's failure record";
 }

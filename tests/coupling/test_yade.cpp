@@ -290,9 +290,17 @@ TEST(Yade, RollingFrictionUsesTheMindlinMomentLaw) {
 
 namespace {
 
-// Writes the inputs for a small packing, lets `edit` break a file, runs them; returns the failure message.
-std::string run_broken(const std::string& name, const std::string& file,
-                       const std::function<std::string(std::string)>& edit) {
+// What a broken run failed with: the message, the kind, and the run folder's relax_failure.json.
+struct Broken {
+  std::string msg;
+  btr::FailureKind kind = btr::FailureKind::EngineError;
+  nlohmann::json record;
+  std::size_t find(const std::string& s) const { return msg.find(s); }
+};
+
+// Writes the inputs for a small packing, lets `edit` break a file, runs them; returns the failure.
+Broken run_broken(const std::string& name, const std::string& file,
+                  const std::function<std::string(std::string)>& edit) {
   const btr::Scene scene = btr_test::make_scene(name, 3, container(ContainerKind::Box, 0.02, 0.02));
   const btr::Packing p = btr_test::layered_packing(scene, 100, 9);
   const std::string dir = btr_test::fresh_dir(name);
@@ -302,15 +310,20 @@ std::string run_broken(const std::string& name, const std::string& file,
   const std::string path = dir + "/" + file;
   const std::string broken = edit(read_text(path));
   std::ofstream(path) << broken;
-  std::string message;
+  Broken b;
   try {
     btr::run_engine_inputs(p, scene, *adapter, "yade", {}, plan, dir);
     ADD_FAILURE() << "the broken run was accepted";
   } catch (const btr::EngineFailure& e) {
-    message = e.what();
+    b.msg = e.what();
+    b.kind = e.kind();
+    b.record = nlohmann::json::parse(read_text(dir + "/" + btr::kRelaxFailureFile));
+    EXPECT_EQ(b.record["kind"], btr::failure_kind_name(e.kind()));
+    EXPECT_EQ(b.record["engine"], "yade");
+    EXPECT_EQ(b.record["log"], "yade.log");
   }
   EXPECT_FALSE(fs::exists(dir + "/relaxed.csv")) << "a failed run is never a result";
-  return message;
+  return b;
 }
 
 std::string replace_once(std::string s, const std::string& what, const std::string& with) {
@@ -323,43 +336,54 @@ std::string replace_once(std::string s, const std::string& what, const std::stri
 
 TEST(Yade, BrokenPackingIsReported) {
   if (!have_yade()) FAIL() << "scripts/setup.sh installs it: " << "yade Python module not installed";
-  const std::string msg = run_broken("yade_broken_packing", "yade_packing.csv", [](std::string s) {
+  const Broken msg = run_broken("yade_broken_packing", "yade_packing.csv", [](std::string s) {
     const auto line3 = s.find("\n3,");
     return s.replace(line3 + 1, s.find(',', line3 + 3) - line3 - 1, "3,not-a-number");
   });
-  EXPECT_NE(msg.find("yade_packing.csv line 4"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("last lines of"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("yade_packing.csv line 4"), std::string::npos) << msg.msg;
+  EXPECT_NE(msg.find("last lines of"), std::string::npos) << msg.msg;
+  EXPECT_EQ(msg.kind, btr::FailureKind::EngineError);
+  EXPECT_EQ(msg.record["values"]["exit_status"], 1);
 }
 
 TEST(Yade, BrokenScriptIsReported) {
   if (!have_yade()) FAIL() << "scripts/setup.sh installs it: " << "yade Python module not installed";
-  const std::string msg = run_broken("yade_broken_script", "relax_yade.py",
-                                     [](std::string s) { return replace_once(s, "    add_grains(", "    add_grainz("); });
-  EXPECT_NE(msg.find("NameError"), std::string::npos) << msg;
+  const Broken msg = run_broken("yade_broken_script", "relax_yade.py",
+                                [](std::string s) { return replace_once(s, "    add_grains(", "    add_grainz("); });
+  EXPECT_NE(msg.find("NameError"), std::string::npos) << msg.msg;
+  EXPECT_EQ(msg.kind, btr::FailureKind::EngineError);
 }
 
 TEST(Yade, BlowUpIsAFailure) {
   if (!have_yade()) FAIL() << "scripts/setup.sh installs it: " << "yade Python module not installed";
   // 40 times the stable step: Hertz contacts gain energy at every collision.
-  const std::string msg = run_broken("yade_blowup", "relax_yade.py", [](std::string s) {
+  const Broken msg = run_broken("yade_blowup", "relax_yade.py", [](std::string s) {
     const std::string line = line_starting(s, "TIMESTEP = ");
     const double dt = std::stod(line.substr(11));
     return replace_once(s, line, "TIMESTEP = " + g17(40 * dt));
   });
   EXPECT_TRUE(msg.find("blow-up") != std::string::npos || msg.find("fell through the floor") != std::string::npos ||
               msg.find("left the container") != std::string::npos || msg.find("outside the container") != std::string::npos)
-      << msg;
+      << msg.msg;
+  // The script's own checks name the kind (its status file's failure_kind).
+  EXPECT_TRUE(msg.kind == btr::FailureKind::BlowUp || msg.kind == btr::FailureKind::OutsideContainer ||
+              msg.kind == btr::FailureKind::NonFinite)
+      << msg.record.dump();
+  if (msg.kind == btr::FailureKind::BlowUp) {
+    EXPECT_GT(msg.record["values"]["kinetic_energy"].get<double>(), msg.record["values"]["bound"].get<double>());
+  }
 }
 
 // Without its floor the bed falls forever: the run reports grains below the floor.
 TEST(Yade, GrainsLeavingTheContainerAreAFailure) {
   if (!have_yade()) FAIL() << "scripts/setup.sh installs it: " << "yade Python module not installed";
-  const std::string msg = run_broken("yade_no_floor", "relax_yade.py", [](std::string s) {
+  const Broken msg = run_broken("yade_no_floor", "relax_yade.py", [](std::string s) {
     s = replace_once(s, "    add_plane(axis=2, position=0)  # floor", "    pass  # floor removed");
     const std::string checks = line_starting(s, "MAX_CHECKS = ");
     return replace_once(s, checks, "MAX_CHECKS = 5");  // the lowest grains fall below z = 0, the bound is not reached
   });
-  EXPECT_NE(msg.find("fell through the floor"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("fell through the floor"), std::string::npos) << msg.msg;
+  EXPECT_EQ(msg.kind, btr::FailureKind::OutsideContainer) << msg.record.dump();
 }
 
 // read_back alone: no status means the script did not finish; outputs that contradict the
@@ -373,19 +397,20 @@ TEST(Yade, ReadBackRejectsMissingAndBadOutputs) {
   plan.max_time = 0.1;
   plan.kinetic_threshold = 1e-9;
   const std::string dir = btr_test::fresh_dir("yade_read_back");
-  auto expect_failure = [&](const std::string& needle) {
+  auto expect_failure = [&](const std::string& needle, btr::FailureKind kind) {
     try {
       adapter->read_back(dir, p, scene, plan);
       ADD_FAILURE() << "accepted; expected a failure mentioning " << needle;
     } catch (const btr::EngineFailure& e) {
       EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+      EXPECT_EQ(btr::failure_kind_name(e.kind()), std::string(btr::failure_kind_name(kind))) << e.what();
     }
   };
-  expect_failure("no status file");
+  expect_failure("no status file", btr::FailureKind::BadOutput);
 
   std::ofstream(dir + "/yade_status.json") << R"({"status": "ok", "stop_reason": "kinetic-energy", "time": 0.05,
                                                   "steps": 50000, "wall_seconds": 1.0})";
-  expect_failure("missing output");
+  expect_failure("missing output", btr::FailureKind::BadOutput);
 
   // Grains 4 mm apart along x on the floor (grain 2 at x_of_grain_2), velocity (i, -2i, 3i) mm/s.
   auto final_rows = [&](double x_of_grain_2) {
@@ -400,9 +425,9 @@ TEST(Yade, ReadBackRejectsMissingAndBadOutputs) {
   std::ofstream(dir + "/yade_kinetic.csv") << "time,kinetic_energy\n0,0\n0.05,1e-12\n";
   std::ofstream(dir + "/yade_contacts.csv") << "i,j,fn,overlap\n1,0,1e-4,1e-7\n";
   final_rows(0.011);  // beyond the wall x = +0.01
-  expect_failure("grain 2 left the container");
+  expect_failure("grain 2 left the container", btr::FailureKind::OutsideContainer);
   final_rows(-0.0039);  // nearly on top of grain 1: a contact YADE missed
-  expect_failure("grains went into each other");
+  expect_failure("grains went into each other", btr::FailureKind::MissedContact);
   final_rows(0.0);
   const btr::RelaxResult ok = adapter->read_back(dir, p, scene, plan);
   EXPECT_EQ(ok.stop_reason, "kinetic-energy");
@@ -416,17 +441,38 @@ TEST(Yade, ReadBackRejectsMissingAndBadOutputs) {
   EXPECT_EQ(ok.kinetic_history.size(), 2u);
 
   std::ofstream(dir + "/yade_kinetic.csv") << "time,kinetic_energy\n0,0\n0.05,nan\n";
-  expect_failure("non-finite");
+  expect_failure("non-finite", btr::FailureKind::NonFinite);
   std::ofstream(dir + "/yade_kinetic.csv") << "time,kinetic_energy\n0,0\n0.05,1e-6\n";
-  expect_failure("is not below the threshold");
+  expect_failure("is not below the threshold", btr::FailureKind::BadOutput);
   std::ofstream(dir + "/yade_kinetic.csv") << "time,kinetic_energy\n0,0\n0.05,1e-12\n";
   {
     std::ofstream f(dir + "/yade_final.csv");
     f << "id,x,y,z,vx,vy,vz\n1,0,0,0.001,0,0,0\n2,0,0,0.001,0,0,0\n";  // grain 3 lost
   }
-  expect_failure("lost grains");
+  expect_failure("lost grains", btr::FailureKind::LostGrains);
+  // A failed status: the kind is the script's failure_kind (engine_error without one).
   std::ofstream(dir + "/yade_status.json") << R"({"status": "failed", "message": "something broke"})";
-  expect_failure("something broke");
+  expect_failure("something broke", btr::FailureKind::EngineError);
+  std::ofstream(dir + "/yade_status.json") << R"({"status": "failed", "message": "bodies were lost",
+                                                  "failure_kind": "lost_grains"})";
+  expect_failure("bodies were lost", btr::FailureKind::LostGrains);
+  // A blow-up gets the last sample of the history and the bound (the script writes the history before failing).
+  std::ofstream(dir + "/yade_kinetic.csv") << "time,kinetic_energy\n0,0\n0.0125,7.5\n";
+  std::ofstream(dir + "/yade_status.json") << R"({"status": "failed", "message": "blow-up: ...",
+                                                  "failure_kind": "blow_up", "time": 0.0125, "steps": 12500})";
+  try {
+    adapter->read_back(dir, p, scene, plan);
+    ADD_FAILURE() << "a failed status was accepted";
+  } catch (const btr::EngineFailure& e) {
+    EXPECT_EQ(e.kind(), btr::FailureKind::BlowUp);
+    EXPECT_EQ(e.values()["kinetic_energy"].get<double>(), 7.5);
+    EXPECT_EQ(e.values()["time"].get<double>(), 0.0125);
+    EXPECT_DOUBLE_EQ(e.values()["bound"].get<double>(), btr::kinetic_energy_bound(p.grains, scene));
+    EXPECT_EQ(e.values()["steps"].get<int>(), 12500);
+  }
+  // An unknown kind name is no kind: engine_error.
+  std::ofstream(dir + "/yade_status.json") << R"({"status": "failed", "message": "odd", "failure_kind": "gremlins"})";
+  expect_failure("odd", btr::FailureKind::EngineError);
 }
 
 // A period of at most 4 largest radii cannot be given to YADE: a grain there spans half the period and
@@ -493,6 +539,8 @@ TEST(Yade, EqualGrainsMeetAcrossThePeriodicBoundary) {
     ADD_FAILURE() << "YADE's default margin gave no lost contact here; the regression no longer shows";
   } catch (const btr::EngineFailure& e) {
     EXPECT_NE(std::string(e.what()).find("grains went into each other"), std::string::npos) << e.what();
+    EXPECT_EQ(e.kind(), btr::FailureKind::MissedContact);
+    EXPECT_NE(read_text(bad + "/" + btr::kRelaxFailureFile).find("\"missed_contact\""), std::string::npos);
   }
   EXPECT_FALSE(fs::exists(bad + "/relaxed.csv"));
 }

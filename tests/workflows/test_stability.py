@@ -77,8 +77,12 @@ def test_forced_step_blows_up_and_rule_step_is_stable(tmp_path, btr_binary, ligg
     forced = st.relax_once(btr_binary, csv, engine, out, 1500 * dt, forced=20 * dt, time_limit=120,
                            progress=lambda m: None)
     assert forced["rc"] == 5, forced
-    why = st.classify(forced["error"])
-    assert why.startswith(("blow-up", "lost grains", "NaN", "grains outside")), forced["error"]
+    # the failure's kind comes from relax_failure.json, written by btr relax where the failure was detected
+    assert forced["failure"] is not None and forced["failure"]["engine"] == engine, forced
+    assert forced["failure"]["kind"] in ("blow_up", "lost_grains", "non_finite", "outside_container",
+                                         "missed_contact"), forced["failure"]
+    why = st.classify(forced["failure"])
+    assert why == st.FAILURE_REASONS[forced["failure"]["kind"]]
     ok, why2 = st.forced_bounded(forced, 1e-9, 0.01)
     assert not ok and why2 == why
     # the verdict of a run that blew up at its own step is "unstable"
@@ -87,8 +91,8 @@ def test_forced_step_blows_up_and_rule_step_is_stable(tmp_path, btr_binary, ligg
 
 def test_soft_large_grains_are_outside_validity_with_the_hertz_overlap(tmp_path, btr_binary, liggghts):
     csv = tiny_case(tmp_path, btr_binary, "soft_large")
-    p = read_packing(csv)
-    pred = st.predicted_overlap(p, p.scene())
+    pred = st.predicted_overlap(btr_binary, csv, tmp_path / "predicted")
+    assert pred["law"] == "hertz" and pred["floor_grains"] >= 1
     # hand value: one 5 cm grain (rho 2500, E 1e5, nu 0.3) on a wall of the same material
     r, e_star = 0.025, 1e5 / (2 * (1 - 0.3 ** 2))
     m = 2500 * 4 / 3 * math.pi * r ** 3
@@ -105,6 +109,28 @@ def test_soft_large_grains_are_outside_validity_with_the_hertz_overlap(tmp_path,
     assert 0.8 * pred["single"] < measured < 1.2 * pred["column"]
 
 
+def test_predicted_overlap_of_one_grain_on_the_floor_is_hertz_by_hand(tmp_path, btr_binary):
+    # one grain of the base case (rho 2500, E = 5e6 Pa, nu = 0.3) rained onto the floor; no engine runs
+    case = next(c for c in st.build_cases(tiny=True) if c["name"] == "base")
+    case["scene"]["grains"]["count"] = 1
+    write_scene_toml(tmp_path / "one.toml", case["scene"])
+    subprocess.run([btr_binary, "deposit", str(tmp_path / "one.toml"), "-o", str(tmp_path / "one"), "--name", "btr",
+                    "-q"], check=True)
+    p = read_packing(str(tmp_path / "one" / "btr.csv"))
+    r = float(p.radius[0])
+    assert p.pos[0, 2] == pytest.approx(r, rel=1e-12)
+    e_star = 1.0 / (2.0 * (1.0 - 0.3 ** 2) / 5e6)  # grain and floor of the same material
+    m = 2500.0 * 4.0 / 3.0 * math.pi * r ** 3
+    delta = (3.0 * m * 9.81 / (4.0 * e_star * math.sqrt(r))) ** (2.0 / 3.0)
+    pred = st.predicted_overlap(btr_binary, tmp_path / "one" / "btr.csv", tmp_path / "pred")
+    assert pred == {"law": "hertz", "single": pytest.approx(delta / r, rel=1e-12),
+                    "column": pytest.approx(delta / r, rel=1e-12), "floor_grains": 1}
+    record = json.loads((tmp_path / "pred" / btr_cli.PREDICTED_OVERLAP_FILE).read_text())
+    assert record["single_grain"]["mean_overlap"] == pytest.approx(delta, rel=1e-12)
+    assert record["wall_material"] == {"species": 1, "young": 5e6, "poisson": 0.3}
+    assert not any(f.name.startswith(("in.", "relax_yade", "log.")) for f in (tmp_path / "pred").iterdir())
+
+
 def test_liggghts_refuses_restitution_near_zero(tmp_path, btr_binary, liggghts):
     csv = tiny_case(tmp_path, btr_binary, "e0.05_mu1")
     run, (verdict, reason, _) = rest(btr_binary, csv, "liggghts", tmp_path / "rule")
@@ -118,7 +144,8 @@ def test_rest_run_out_of_its_wall_time_is_not_at_rest(tmp_path, btr_binary, ligg
     never = btr_cli.variant(csv, tmp_path / "never", "btr", lambda sc: sc["relax"].update(
         stop_rule="kinetic-energy", stop_kinetic_ratio=st.NEVER_STOP_RATIO))
     run, (verdict, reason, _) = rest(btr_binary, never, "liggghts", tmp_path / "rule", max_time=1.0, time_limit=1.0)
-    assert run["rc"] == 5 and "wall-time limit" in run["error"], run["error"]
+    assert run["rc"] == 5 and run["failure"]["kind"] == "time_limit", run["error"]
+    assert run["failure"]["values"]["time_limit"] == 1.0
     assert verdict == "not at rest", reason
 
 
@@ -181,9 +208,49 @@ def test_stability_workflow_falls_back_to_the_touching_start(tmp_path, source_di
     assert probe_dirs and not any((d / "preloaded.csv").exists() for d in probe_dirs)
 
 
-def test_rest_run_out_of_wall_time_is_not_called_unstable():
-    hung = {"rc": 5, "error": "btr relax: yade relaxation failed in X: killed after the wall-time limit (240 s)"}
+def _failed_run(tmp_path, name, kind, message, values=None):
+    """A failed run's folder with a relax_failure.json made by hand, and the run as relax_once returns it."""
+    out = tmp_path / name
+    out.mkdir()
+    (out / btr_cli.FAILURE_FILE).write_text(json.dumps(
+        {"kind": kind, "engine": "liggghts", "message": message, "values": values or {}, "log": "log.liggghts"}))
+    return out, {"rc": 5, "error": "btr relax: " + message, "failure": btr_cli.failure_record(out)}
+
+
+def test_classification_follows_the_failure_file_not_the_message(tmp_path):
+    # messages that the old text matching would have misread: the kind in the file decides
+    out, hung = _failed_run(tmp_path, "hung", "time_limit", "the kinetic energy blew up and grains were lost",
+                            {"time_limit": 240.0, "wall_seconds": 240.02})
+    assert btr_cli.failure_record(out)["values"]["time_limit"] == 240.0
     assert st.rest_verdict(hung, 1e-12)[0] == "not at rest"
-    blown = {"rc": 5, "error": "btr relax: ... kinetic energy grew to 3 J at t = 0.01 s ...: the run blew up"}
-    assert st.rest_verdict(blown, 1e-12) == ("unstable", st.classify(blown["error"]), {})
-    assert st.classify(blown["error"]).startswith("blow-up")
+    _, blown = _failed_run(tmp_path, "blown", "blow_up", "lost: killed after NaN",
+                           {"kinetic_energy": 3.0, "bound": 1e-3, "time": 0.01})
+    assert st.rest_verdict(blown, 1e-12) == ("unstable", st.FAILURE_REASONS["blow_up"], {})
+    assert st.classify(blown["failure"]).startswith("blow-up")
+    assert st.forced_bounded(blown, 1.0, 0.01) == (False, st.FAILURE_REASONS["blow_up"])
+    for kind in ("lost_grains", "non_finite", "outside_container", "missed_contact", "bad_output"):
+        _, run = _failed_run(tmp_path, kind, kind, "engine error: ERROR: nothing to see")
+        assert st.classify(run["failure"]) == st.FAILURE_REASONS[kind]
+    _, err = _failed_run(tmp_path, "err", "engine_error", "exit status 1", {"log_line": "ERROR: Unknown pair style"})
+    assert st.classify(err["failure"]) == "engine error: ERROR: Unknown pair style"
+    # no file (a run that did not fail, or an older btr): nothing to read, the reason is the generic one
+    assert btr_cli.failure_record(tmp_path / "nowhere") is None
+    assert st.classify(None) == "engine error"
+
+
+def test_kept_rows_are_reclassified_from_their_failure_files(tmp_path):
+    probes = tmp_path / "cases" / "base" / "liggghts"
+    probes.mkdir(parents=True)
+    (probes / "forced_x4").mkdir()
+    (probes / "forced_x4" / btr_cli.FAILURE_FILE).write_text(json.dumps(
+        {"kind": "lost_grains", "engine": "liggghts", "message": "blew up", "values": {}}))
+    row = {"case": "base", "engine": "liggghts",
+           "edge": {"largest_bounded": 2.0, "smallest_unbounded": 4.0, "unbounded_reason": "engine error",
+                    "probes": [{"multiple": 2.0, "bounded": True, "reason": ""},
+                               {"multiple": 4.0, "bounded": False, "reason": "engine error"},
+                               {"multiple": 8.0, "bounded": False, "reason": "kinetic energy 3 J > 10 x ..."}]}}
+    st._reclassified(row, tmp_path)
+    e = row["edge"]
+    assert e["probes"][1]["reason"] == "lost grains" and e["unbounded_reason"] == "lost grains"
+    # a probe without a failure file (bounded by energy, or an older btr) keeps its reason
+    assert e["probes"][0]["reason"] == "" and e["probes"][2]["reason"] == "kinetic energy 3 J > 10 x ..."

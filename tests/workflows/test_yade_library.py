@@ -66,3 +66,10 @@ def test_every_yade_script_carries_the_library(tmp_path, source_dir, btr_binary)
     scripts = list((tmp_path / "yade").glob("*.py"))
     assert len(scripts) == 1
     assert code in scripts[0].read_text()
+
+
+def test_run_failure_carries_its_kind(library):
+    # the kind the script writes as yade_status.json's failure_kind (a FailureKind name, coupling/dem/relax.h)
+    assert library.RunFailure("boom").kind == "engine_error"
+    e = library.RunFailure("blow-up: ...", "blow_up")
+    assert e.kind == "blow_up" and str(e) == "blow-up: ..."

@@ -6,13 +6,18 @@ import shutil
 import subprocess
 from pathlib import Path
 
-from .io import read_json, read_packing, write_json, write_scene_toml
+from .io import InputError, read_json, read_packing, write_json, write_scene_toml
 from .runner import StepFailed, run_command
 
 ENGINES = ("liggghts", "yade")
 # `btr relax` exit code: the run ended and wrote its packing, but a target it was given (--target-phi) was not
 # reached; relaxed.json's target_phi record says by how much.
 TARGET_NOT_REACHED = 6
+# `btr relax` exit code: the engine failed; OUTDIR/relax_failure.json says how ("kind": engine_error, time_limit,
+# blow_up, non_finite, lost_grains, outside_container, missed_contact, bad_output; docs/faults.md).
+ENGINE_FAILED = 5
+FAILURE_FILE = "relax_failure.json"
+PREDICTED_OVERLAP_FILE = "predicted_overlap.json"
 
 
 def deposit(btr: str, scene_path: str, outdir, name: str = "btr", seed: int | None = None, count: int | None = None,
@@ -39,8 +44,9 @@ def deposit(btr: str, scene_path: str, outdir, name: str = "btr", seed: int | No
 def relax(btr: str, packing_csv: str, engine: str, outdir, np: int = 1, timestep: float | None = None,
           time_limit: float | None = None, progress=print, label: str | None = None, check: bool = True,
           extra_args=()) -> dict:
-    """btr relax PACKING --engine E -o OUTDIR [extra options]; returns {returncode, wall_seconds, csv, error, ...}.
-    With check=True a failed run raises StepFailed with the program's message."""
+    """btr relax PACKING --engine E -o OUTDIR [extra options]; returns {returncode, wall_seconds, csv, error,
+    failure, ...}: `failure` is the run's relax_failure.json (kind, engine, message, values) when the engine failed
+    (exit 5), else None. With check=True a failed run raises StepFailed with the program's message."""
     if engine not in ENGINES:
         raise StepFailed(f"relax: engine: expected one of {', '.join(ENGINES)}, got {engine!r}")
     label = label or f"relax-{engine}"
@@ -60,12 +66,14 @@ def relax(btr: str, packing_csv: str, engine: str, outdir, np: int = 1, timestep
            "wall_seconds": res["wall_seconds"], "cpu_seconds": res["cpu_seconds"],
            "argv": [str(a) for a in argv],
            "csv": str(outdir / "relaxed.csv"), "error": err if res["returncode"] not in (0, TARGET_NOT_REACHED) else None,
-           "stdout": Path(res["stdout"]).read_text(errors="replace").strip()}
+           "stdout": Path(res["stdout"]).read_text(errors="replace").strip(),
+           "failure": failure_record(outdir) if res["returncode"] == ENGINE_FAILED else None}
     if out["returncode"] == 0 and not (outdir / "relaxed.csv").exists():
         out["returncode"] = -1
         out["error"] = f"btr relax succeeded but wrote no {outdir / 'relaxed.csv'}"
     if check and out["returncode"] != 0:
-        raise StepFailed(f"{label}: btr relax exited with status {res['returncode']}:\n{out['error'][-3000:]}")
+        kind = f" ({out['failure']['kind']})" if out["failure"] else ""
+        raise StepFailed(f"{label}: btr relax exited with status {res['returncode']}{kind}:\n{out['error'][-3000:]}")
     return out
 
 
@@ -92,6 +100,31 @@ def pour(btr: str, input_path: str, engine: str, outdir, np: int = 1, time_limit
         out["returncode"] = -1
         out["error"] = f"btr pour succeeded but wrote no {outdir / 'poured.csv'}"
     return out
+
+
+def failure_record(outdir) -> dict | None:
+    """OUTDIR/relax_failure.json of the last `btr relax` into OUTDIR, or None if that run did not fail (btr removes
+    the file when a run starts and writes it when the engine fails)."""
+    path = Path(outdir) / FAILURE_FILE
+    if not path.exists():
+        return None
+    try:
+        record = read_json(path)
+    except InputError:
+        return None
+    return record if isinstance(record, dict) and "kind" in record else None
+
+
+def predict_overlap(btr: str, packing_csv: str, outdir) -> dict:
+    """`btr relax PACKING --predict-overlap -o OUTDIR` (no engine run): the contact law's static overlap of the
+    grains on the floor, alone and under their column, as OUTDIR/predicted_overlap.json holds it."""
+    outdir = Path(outdir).absolute()
+    outdir.mkdir(parents=True, exist_ok=True)
+    p = subprocess.run([btr, "relax", os.path.abspath(packing_csv), "-o", str(outdir), "--predict-overlap"],
+                       capture_output=True, text=True, timeout=120)
+    if p.returncode != 0:
+        raise StepFailed(f"btr relax --predict-overlap exited with status {p.returncode}: {p.stderr.strip()[-1500:]}")
+    return read_json(outdir / PREDICTED_OVERLAP_FILE)
 
 
 def _engine_log(outdir: Path, engine: str) -> str:

@@ -17,10 +17,12 @@ For every material case and engine:
                        packing holds), NaN, lost grains, grains outside, kinetic-energy growth
      outside validity  bounded, but the static overlap is above OVERLAP_BOUND of the smaller radius: the
                        contact model (small-overlap Hertz/Hooke) is outside its range; the predicted static
-                       overlap of the same law is shown beside it (predicted_overlap)
+                       overlap of the same law is shown beside it (predicted_overlap: `btr relax
+                       --predict-overlap`, the coupling's contact law)
      refused           the coupling refused the case before any engine ran (with its reason)
      not at rest       the rest run used its wall-time budget first (a cost verdict, never unstable)
-   Overlaps are btr relax's own (relaxed.json: final_largest_overlap, final_largest_floor_overlap).
+   Overlaps are btr relax's own (relaxed.json: final_largest_overlap, final_largest_floor_overlap); why a
+   run failed is the kind of its relax_failure.json (classify), never its message text.
 2. **Find the edge**: `btr relax --force-timestep` (hidden, study only) at multiples m of the rule's
    step over a window of WINDOW_STEPS rule steps from the same start as the rest run (pre-loaded or
    touching) and a stop rule that never fires (every probe runs its whole window): m = 2, 4, 8, ... up
@@ -118,32 +120,13 @@ def build_cases(tiny: bool = False, full: bool = False) -> list:
 
 # ---------------------------------------------------------------- predicted static overlap
 
-def predicted_overlap(p, scene: dict) -> dict:
-    """Static overlap / radius of the contact law for a grain on the floor: alone (weight m g) and
-    under its column (F = total weight / number of grains touching the floor).
-    Hertz: delta = (3 F / (4 E* sqrt(R)))^(2/3); Hooke: delta = F / k_n (LIGGGHTS' k_n at V = sqrt(2 g d_max)).
-    E* of grain and wall (the wall takes the first component's material)."""
-    table = dem_params.species_table(scene)
-    wall = table[int(dem_params.components(scene)[0]["species"])]
-    m = dem_params.masses(p.radius, p.species, scene)
-    on_floor = p.pos[:, 2] <= p.radius * (1.0 + 1e-3) + 1e-12
-    if not np.any(on_floor):
-        on_floor = p.pos[:, 2] <= np.min(p.pos[:, 2] - p.radius) + p.radius * 1.001
-    r = float(np.mean(p.radius[on_floor]))
-    mat = table[int(p.species[on_floor][0])]
-    y_eff = dem_params.effective_young(mat, wall)
-    m1 = float(np.mean(m[on_floor]))
-    column_load = float(np.sum(m)) * dem_params.G / int(np.sum(on_floor))
-    hooke = (scene.get("relax") or {}).get("model", "hertz") == "hooke"
-
-    def delta(force):
-        if hooke:
-            k = dem_params.hooke_stiffness(r, m1, y_eff, dem_params.hooke_characteristic_velocity(p.radius))
-            return force / k
-        return (3.0 * force / (4.0 * y_eff * math.sqrt(r))) ** (2.0 / 3.0)
-
-    return {"law": "hooke" if hooke else "hertz", "single": delta(m1 * dem_params.G) / r,
-            "column": delta(column_load) / r, "floor_grains": int(np.sum(on_floor))}
+def predicted_overlap(btr: str, csv, outdir) -> dict:
+    """Static overlap / radius of the contact law for a grain on the floor: alone (weight m g) and under its
+    column (the packing's weight shared by the grains on the floor), from `btr relax --predict-overlap` (the
+    coupling's law and materials, coupling/dem/preload.h; written to OUTDIR/predicted_overlap.json)."""
+    pred = btr_cli.predict_overlap(btr, csv, outdir)
+    return {"law": pred["law"], "single": float(pred["single_grain"]["mean_relative"]),
+            "column": float(pred["under_column"]["mean_relative"]), "floor_grains": int(pred["floor_grains"])}
 
 
 def relaxed_overlap(relax: dict) -> dict:
@@ -160,21 +143,30 @@ def _stable_step(stdout: str) -> float | None:
     return float(m.group(1)) if m else None
 
 
-def classify(message: str) -> str:
-    """The reason of a failed `btr relax` (exit 5), from its message."""
-    m = message.lower()
-    if "killed after" in m or "wall-time limit" in m or "time limit" in m:
-        return "engine hung (wall-time limit)"
-    if "blew up" in m or "blow-up" in m or "kinetic energy grew" in m or "above the bound" in m:
-        return "blow-up (kinetic energy above twice the energy the packing holds)"
-    if "lost" in m:
-        return "lost grains"
-    if "non-finite" in m or "nan" in m:
-        return "NaN"
-    if "outside the container" in m or "left the plane" in m:
-        return "grains outside the container"
-    err = next((x.strip() for x in message.splitlines() if x.strip().startswith("ERROR")), None)
-    return f"engine error: {err}" if err else "engine error"
+# The report's reason for each kind of relax_failure.json (coupling/dem/relax.h, FailureKind).
+FAILURE_REASONS = {
+    "time_limit": "engine hung (wall-time limit)",
+    "blow_up": "blow-up (kinetic energy above twice the energy the packing holds)",
+    "non_finite": "NaN",
+    "lost_grains": "lost grains",
+    "outside_container": "grains outside the container",
+    "missed_contact": "grains went into each other (a contact the engine missed)",
+    "bad_output": "engine error (bad output)",
+    "engine_error": "engine error",
+}
+
+
+def classify(failure: dict | None) -> str:
+    """The reason of a failed `btr relax` (exit 5), from its relax_failure.json record (btr_cli.failure_record):
+    the kind decides; an engine error names the log line the engine failed on, when it had one."""
+    if not failure:
+        return "engine error"
+    kind = failure.get("kind")
+    reason = FAILURE_REASONS.get(kind, "engine error")
+    line = (failure.get("values") or {}).get("log_line")
+    if kind == "engine_error" and line:
+        return f"engine error: {line.strip()}"
+    return reason
 
 
 def kinetic_history(outdir) -> np.ndarray:
@@ -198,7 +190,8 @@ def relax_once(btr, csv, engine, outdir, max_time, forced=None, time_limit=None,
     r = btr_cli.relax(btr, csv, engine, outdir, time_limit=time_limit, progress=progress, label=label or engine,
                       check=False, extra_args=extra)
     out = {"rc": r["returncode"], "wall_seconds": r["wall_seconds"], "error": r["error"] or "",
-           "stable_step": _stable_step(r["stdout"]), "relax": None, "kinetic": np.zeros((0, 2))}
+           "failure": r["failure"], "stable_step": _stable_step(r["stdout"]), "relax": None,
+           "kinetic": np.zeros((0, 2))}
     if r["returncode"] == 0:
         out["relax"] = json.loads((Path(outdir) / "relaxed.json").read_text())["relax"]
         out["kinetic"] = kinetic_history(outdir)
@@ -230,8 +223,8 @@ def rest_verdict(run: dict, threshold: float) -> tuple[str, str, dict]:
     if run["rc"] == 2:
         return "refused", _first_line(run["error"]), {}
     if run["rc"] != 0:
-        why = classify(run["error"])
-        if why.startswith("engine hung"):  # at the rule's step this is the wall-time budget, not a blow-up
+        why = classify(run.get("failure"))
+        if (run.get("failure") or {}).get("kind") == "time_limit":  # the wall-time budget, not a blow-up
             return "not at rest", "wall-time limit reached before the stop rule or the time cap", {}
         return "unstable", why, {}
     rx = run["relax"]
@@ -254,7 +247,7 @@ def forced_bounded(run: dict, ref_max_kinetic: float, ref_overlap: float) -> tup
     if run["rc"] == 2:
         return False, "refused: " + run["error"].splitlines()[0]
     if run["rc"] != 0:
-        return False, classify(run["error"])
+        return False, classify(run.get("failure"))
     e = run["kinetic"][:, 1] if len(run["kinetic"]) else np.zeros(0)
     if len(e) and not np.all(np.isfinite(e)):
         return False, "NaN"
@@ -359,7 +352,7 @@ def run_stability(outdir=None, engines=("liggghts", "yade"), tiny: bool = False,
                              rest_time=REST_FREE_FALL_TIMES * math.sqrt(2.0 * top / dem_params.G),
                              threshold=dem_params.kinetic_threshold(p.radius, p.species, sc,
                                                                     float(sc["relax"]["stop_kinetic_ratio"])),
-                             predicted=predicted_overlap(p, sc))
+                             predicted=predicted_overlap(btr, dep["csv"], cdir))
             return built
 
         for engine in engines:
@@ -399,7 +392,7 @@ def run_stability(outdir=None, engines=("liggghts", "yade"), tiny: bool = False,
                     ref = relax_once(btr, c["probe_csv"], engine, edir / "window_x1", window * rest["stable_step"],
                                      time_limit=time_limit, label="x1", progress=progress, preload=preload)
                     if ref["rc"] != 0:
-                        row["reason"] += f"; the rule's step over the window failed too: {classify(ref['error'])}"
+                        row["reason"] += f"; the rule's step over the window failed too: {classify(ref.get('failure'))}"
                         continue
                     ref_ke = max(float(np.max(ref["kinetic"][:, 1])) if len(ref["kinetic"]) else 0.0, c["threshold"])
                     ref_ov = relaxed_overlap(ref["relax"])["largest"]
@@ -448,13 +441,15 @@ def run_stability(outdir=None, engines=("liggghts", "yade"), tiny: bool = False,
 
 
 def _reclassified(row: dict, outdir: Path) -> dict:
-    """A kept row whose probes' reasons are re-read from their stderr with today's classify()."""
+    """A kept row whose failed probes' reasons are read again from their relax_failure.json with today's
+    classify(); a probe without one (run by an older btr) keeps its reason."""
     edge = row.get("edge") or {}
     for pr in edge.get("probes", []):
-        label = f"x{pr['multiple']:.4g}"
-        err = outdir / "cases" / row["case"] / row["engine"] / f"forced_{label}" / f"{label}.stderr"
-        if not pr["bounded"] and pr["reason"].startswith("engine error") and err.exists():
-            pr["reason"] = classify(err.read_text(errors="replace"))
+        if pr["bounded"]:
+            continue
+        record = btr_cli.failure_record(outdir / "cases" / row["case"] / row["engine"] / f"forced_x{pr['multiple']:.4g}")
+        if record is not None:
+            pr["reason"] = classify(record)
             if pr["multiple"] == edge.get("smallest_unbounded"):
                 edge["unbounded_reason"] = pr["reason"]
     return row
