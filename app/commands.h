@@ -30,5 +30,6 @@ Runner add_measure_command(CLI::App& app);
 Runner add_shake_command(CLI::App& app);
 Runner add_drum_command(CLI::App& app);
 Runner add_redeposit_command(CLI::App& app);
+Runner add_pour_command(CLI::App& app);
 
 }  // namespace btr_app

@@ -1,4 +1,4 @@
-// The `btr` program: deposit, bench, relax, export, measure, shake, drum, redeposit.
+// The `btr` program: deposit, bench, relax, export, pour, measure, shake, drum, redeposit.
 #include <iostream>
 
 #include "commands.h"
@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   remember(btr_app::add_bench_command(app));
   remember(btr_app::add_relax_command(app));
   remember(btr_app::add_export_command(app));
+  remember(btr_app::add_pour_command(app));
   remember(btr_app::add_measure_command(app));
   remember(btr_app::add_shake_command(app));
   remember(btr_app::add_redeposit_command(app));

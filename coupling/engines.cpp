@@ -32,4 +32,16 @@ RelaxResult relax(const Packing& packing, const Scene& scene, const std::string&
   return run_engine_inputs(start, scene, *adapter, engine, settings, plan, out_dir);
 }
 
+PourResult pour(const Grains& grains, const Scene& scene, const std::string& engine, const PourSettings& settings,
+                const std::string& out_dir, const nlohmann::json& meta, const Grains* footprint) {
+  check_pour_grains(grains, scene);
+  const auto adapter = make_adapter(engine);
+  const Scene run_scene = pour_scene(scene, settings);
+  const PourLattice lattice = pour_lattice(grains, run_scene, settings.seed, settings.max_batches,
+                                           pour_drop_gap(grains, settings));
+  const RelaxPlan plan = make_pour_plan(lattice, run_scene, settings, engine, footprint);
+  write_pour_inputs(lattice, run_scene, *adapter, settings, plan, out_dir);
+  return run_pour_inputs(lattice, run_scene, *adapter, engine, settings, plan, out_dir, meta);
+}
+
 }  // namespace btr

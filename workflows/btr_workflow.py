@@ -2,7 +2,7 @@
 """btr-dem workflows (run with Debian's /usr/bin/python3).
 
   compare PRE.csv POST.csv -o OUTDIR      structure before/after, displacements, nonphysical BTR configurations
-  pour PACKING.csv -o OUTDIR [--seed N]   reference LIGGGHTS pour of a BTR packing's grains
+  pour PACKING.csv -o OUTDIR [--seed N]   reference DEM pour of a BTR packing's grains (btr pour)
   pipeline [SCENE] [-o OUTDIR]            BTR -> DEM relaxation -> comparison -> report (default inputs/bed3d.toml)
   error-vs-runtime SCENE [-o OUTDIR]      error of BTR, BTR + relaxation and DEM pours against a pour reference
   stability [-o OUTDIR] [--tiny|--full]   stiff/extreme cases run to rest; stable-step margin by bisection
@@ -79,9 +79,10 @@ def main(argv=None) -> int:
     c.add_argument("--contact-tolerance", type=float,
                    help="contact: gap < tolerance x smaller radius (default: btr measure's)")
 
-    p = sub.add_parser("pour", help="reference LIGGGHTS pour of a BTR packing's grains")
+    p = sub.add_parser("pour", help="reference DEM pour of a BTR packing's grains (btr pour)")
     p.add_argument("packing")
     p.add_argument("-o", "--out", required=True)
+    p.add_argument("--engine", choices=["liggghts", "yade"], default="liggghts")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--np", type=int, default=1)
     p.add_argument("--pace", type=float, default=1.0, help="batch interval / batch fall time (default 1)")
@@ -191,10 +192,11 @@ def main(argv=None) -> int:
             from btrdem.core.io import read_packing
             from btrdem.dem.pour import PourSettings, pour
             from btrdem.core.runner import RunRecord
-            settings = PourSettings(seed=args.seed, np=args.np, pace=args.pace, stop_ratio=args.stop_ratio)
+            settings = PourSettings(seed=args.seed, np=args.np, pace=args.pace, stop_ratio=args.stop_ratio,
+                                    engine=args.engine)
             rec = RunRecord(args.out, "pour", inputs=[args.packing, str(Path(args.packing).with_suffix(".json"))],
                             progress=progress, settings=settings.__dict__)
-            with rec.step("liggghts pour") as st:
+            with rec.step(f"{args.engine} pour") as st:
                 summary = pour(read_packing(args.packing), args.out, settings, progress)
                 st.update(outputs=[summary["packing"]])
             rec.finish(summary)

@@ -19,6 +19,7 @@ CheckSchedule check_schedule(const Grains& grains, const Scene& scene, const Rel
   CheckSchedule s;
   const long total = std::max(1L, static_cast<long>(std::ceil(plan.max_time / plan.timestep)));
   long window = std::max(kMinStepsPerCheck, (total + kChecksOverMaxTime - 1) / kChecksOverMaxTime);
+  if (plan.pour.enabled) window = std::max(kMinStepsPerCheck, plan.pour.steps_per_check);  // the pour's interval
   window = (window + kAveragedSamples - 1) / kAveragedSamples * kAveragedSamples;
   s.steps_per_check = window;
   s.average_every = window / kAveragedSamples;

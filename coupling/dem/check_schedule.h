@@ -1,7 +1,8 @@
 #pragma once
 // How a relaxation samples and stops, the same in both engines: the check window (thermo interval = stop-rule
 // check interval = averaging window), the kinetic-energy samples averaged in it, the arming time and the
-// blow-up bound, all derived from the plan.
+// blow-up bound, all derived from the plan. A window is at least 1000 steps: every check ends a `run` chunk and
+// synchronises MPI ranks. A pour (plan.pour) asks for its own window (its check interval), at least as long.
 #include "coupling/dem/relax_plan.h"
 
 namespace btr {

@@ -34,6 +34,26 @@ struct CompactionPlan {
   double rest_kinetic = 0.0;            // J
 };
 
+// The release of a reference pour (pour.h), run before the stop rule: every grain starts held on a lattice
+// (not integrated: a fixed obstacle), and batch k (grains first..last, consecutive ids) is moved down until
+// its lowest centre is drop_gap + 2 r_max above the highest released centre (the first batch: drop_gap + r_max
+// above the floor), joins the integrated grains and falls for steps[k] steps before the next. A batch that
+// would have to move up (the pile reached the held lattice) ends the run as a failure. The stop rule runs
+// once every batch is out: RelaxPlan::max_time counts from the end of the release, and RelaxPlan::arming_time
+// (a time of the run, as in a relaxation) lies past it.
+struct PourRelease {
+  bool enabled = false;
+  struct Batch {
+    std::size_t first = 0, last = 0;  // 0-based indices into the grains, inclusive
+    long steps = 0;                   // steps run after its release
+  };
+  std::vector<Batch> batches;
+  double drop_gap = 0.0;       // m, between the lowest batch grain's surface and the pile's top surface
+  double r_max = 0.0;          // m
+  double release_time = 0.0;   // s, sum of the batches' steps times the time step
+  long steps_per_check = 0;    // the settle's check window (check_schedule)
+};
+
 // The numbers every engine input is built from, computed once by relax.cpp.
 struct RelaxPlan {
   double timestep = 0.0;        // s, already checked against the stable step
@@ -54,6 +74,7 @@ struct RelaxPlan {
   bool has_region = false;
   double region_lo[2] = {0.0, 0.0}, region_hi[2] = {0.0, 0.0};
   CompactionPlan compaction;  // enabled only with a target packing fraction
+  PourRelease pour;           // enabled only for a reference pour (pour.h)
 };
 
 // The threshold of the plan's stop rule: J (kinetic-energy), a ratio (unbalanced-force) or m (displacement).

@@ -4,6 +4,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/prctl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -71,6 +72,12 @@ std::vector<pid_t> children_of_this_process(pid_t except) {
   }
   ::closedir(proc);
   return out;
+}
+
+double children_cpu_seconds() {
+  rusage u {};
+  ::getrusage(RUSAGE_CHILDREN, &u);
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
 }
 
 // Ends what the engine left behind. This process is a child subreaper, so the descendants whose parent
@@ -144,6 +151,7 @@ ProcessOutcome run_process(const EngineCommand& command, const std::string& dir,
   ::prctl(PR_SET_CHILD_SUBREAPER, 1);
   const pid_t parent = ::getpid();
   StopSignalsNoted noted;
+  const double cpu0 = children_cpu_seconds();  // the engine is the only child reaped in between
   const auto t0 = std::chrono::steady_clock::now();
   const pid_t pid = ::fork();
   if (pid < 0) {
@@ -213,6 +221,7 @@ ProcessOutcome run_process(const EngineCommand& command, const std::string& dir,
   if (!killed && g_stop_signal != 0) out.stopped_by = g_stop_signal;  // arrived as the engine ended
   if (killed) ::kill(-pid, SIGKILL);  // leftovers of the group, if any
   end_orphaned_descendants(pid);
+  out.cpu_seconds = children_cpu_seconds() - cpu0;
   return out;
 }
 

@@ -17,6 +17,7 @@ struct ProcessOutcome {
   bool timed_out = false;     // killed for exceeding the limit
   int stopped_by = 0;         // killed because this process received this signal (SIGTERM, SIGINT, SIGHUP)
   double wall_seconds = 0.0;
+  double cpu_seconds = 0.0;   // processor time (user + system) of the child and the descendants it waited for
   bool ok() const { return started && !timed_out && stopped_by == 0 && signal == 0 && exit_code == 0; }
   std::string describe() const;  // "exit status 1", "killed by signal 9", "killed after 3600 s" ...
 };

@@ -277,9 +277,9 @@ std::vector<std::string> write_engine_inputs(const Packing& packing, const Scene
   return adapter.write_inputs(packing, scene, settings, plan, dir);
 }
 
-RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const EngineAdapter& adapter,
+RelaxResult run_and_read_back(const Packing& packing, const Scene& scene, const EngineAdapter& adapter,
                               const std::string& engine, const RelaxSettings& settings, const RelaxPlan& plan,
-                              const std::string& dir) {
+                              const std::string& dir, const std::string& what) {
   const std::string log = adapter.log_file(dir);
   const std::string console = (fs::path(dir) / kConsoleFile).string();
   std::error_code ec;
@@ -291,7 +291,7 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
   // why, the check's numbers) and the message gets the last lines of the engine's log and console.
   auto failure = [&](FailureKind kind, const std::string& why,
                      const nlohmann::json& values = nlohmann::json::object()) -> EngineFailure {
-    std::string msg = engine + " relaxation failed in " + dir + ": " + why;
+    std::string msg = engine + " " + what + " failed in " + dir + ": " + why;
     const nlohmann::json record = {{"kind", failure_kind_name(kind)},
                                    {"engine", engine},
                                    {"message", why},
@@ -343,6 +343,7 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
     throw failure(e.kind(), e.what(), e.values());
   }
   res.wall_seconds = outcome.wall_seconds;
+  res.cpu_seconds = outcome.cpu_seconds;
 
   // Checks every engine's result gets.
   const Grains& in = packing.grains;
@@ -428,27 +429,72 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
     kept_contacts.push_back({new_id[k.i], k.j == 0 ? 0 : new_id[k.j], k.fn});
   }
   res.contacts = std::move(kept_contacts);
-
-  // Outputs.
   std::sort(res.contacts.begin(), res.contacts.end(), [](const RelaxResult::Contact& a, const RelaxResult::Contact& b) {
     return a.i != b.i ? a.i < b.i : a.j < b.j;
   });
-  PointData displacement{"displacement", {}};
   Grains kept_grains;
   std::vector<Vec3> kept_velocities;
   for (std::size_t i = 0; i < in.size(); ++i) {
     if (!kept[i]) continue;
-    Vec3 d = out[i].x - in[i].x;
-    if (c.kind == ContainerKind::Periodic) {
-      d.x() = periodic_wrap(d.x(), c.size_x);
-      if (scene.dimension == 3) d.y() = periodic_wrap(d.y(), c.size_y);
-    }
-    displacement.values.push_back(d.norm());
     kept_grains.push_back(out[i]);
     if (!res.velocities.empty()) kept_velocities.push_back(res.velocities[i]);
   }
   out = std::move(kept_grains);
   res.velocities = std::move(kept_velocities);
+  return res;
+}
+
+void write_run_tables(const RelaxResult& res, const std::string& dir) {
+  std::string kin = "time,kinetic_energy\n";
+  char row[128];
+  for (const auto& [t, e] : res.kinetic_history) {
+    std::snprintf(row, sizeof row, "%.17g,%.17g\n", t, e);
+    kin += row;
+  }
+  write_text_file((fs::path(dir) / "kinetic.csv").string(), kin);
+  std::string con = "id1,id2,normal_force\n";  // id2 = 0: a wall
+  for (const auto& k : res.contacts) {
+    std::snprintf(row, sizeof row, "%lld,%lld,%.17g\n", static_cast<long long>(k.i), static_cast<long long>(k.j),
+                  k.fn);
+    con += row;
+  }
+  write_text_file((fs::path(dir) / "contacts.csv").string(), con);
+  const fs::path velocities = fs::path(dir) / "velocities.csv";
+  std::error_code ec;
+  if (res.velocities.empty()) {
+    fs::remove(velocities, ec);  // an earlier run's file must not pass for this one's
+  } else {
+    std::string vel = "id,vx,vy,vz\n";
+    for (std::size_t i = 0; i < res.velocities.size(); ++i) {
+      const Vec3& v = res.velocities[i];
+      std::snprintf(row, sizeof row, "%zu,%.17g,%.17g,%.17g\n", i + 1, v.x(), v.y(), v.z());
+      vel += row;
+    }
+    write_text_file(velocities.string(), vel);
+  }
+}
+
+RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const EngineAdapter& adapter,
+                              const std::string& engine, const RelaxSettings& settings, const RelaxPlan& plan,
+                              const std::string& dir) {
+  RelaxResult res = run_and_read_back(packing, scene, adapter, engine, settings, plan, dir, "relaxation");
+  const Grains& in = packing.grains;
+  Grains& out = res.relaxed.grains;
+  const Container& c = scene.container;
+  std::vector<char> kept(in.size(), 1);
+  for (std::int64_t id : res.removed) kept[id - 1] = 0;
+
+  // Outputs.
+  PointData displacement{"displacement", {}};
+  for (std::size_t i = 0, k = 0; i < in.size(); ++i) {
+    if (!kept[i]) continue;
+    Vec3 d = out[k++].x - in[i].x;
+    if (c.kind == ContainerKind::Periodic) {
+      d.x() = periodic_wrap(d.x(), c.size_x);
+      if (scene.dimension == 3) d.y() = periodic_wrap(d.y(), c.size_y);
+    }
+    displacement.values.push_back(d.norm());
+  }
   const OverlapReport final_overlap = largest_overlap(out, scene.dimension, c);
   // The largest grain-floor overlap / that grain's radius (the floor's share of final_overlap, which
   // takes every wall and pair): the static overlap a grain's column load gives on the floor.
@@ -522,32 +568,7 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
   res.relaxed.meta = meta;
   write_packing(dir, "relaxed", res.relaxed, {displacement});
 
-  std::string kin = "time,kinetic_energy\n";
-  char row[128];
-  for (const auto& [t, e] : res.kinetic_history) {
-    std::snprintf(row, sizeof row, "%.17g,%.17g\n", t, e);
-    kin += row;
-  }
-  write_text_file((fs::path(dir) / "kinetic.csv").string(), kin);
-  std::string con = "id1,id2,normal_force\n";  // id2 = 0: a wall
-  for (const auto& k : res.contacts) {
-    std::snprintf(row, sizeof row, "%lld,%lld,%.17g\n", static_cast<long long>(k.i), static_cast<long long>(k.j),
-                  k.fn);
-    con += row;
-  }
-  write_text_file((fs::path(dir) / "contacts.csv").string(), con);
-  const fs::path velocities = fs::path(dir) / "velocities.csv";
-  if (res.velocities.empty()) {
-    fs::remove(velocities, ec);  // an earlier run's file must not pass for this one's
-  } else {
-    std::string vel = "id,vx,vy,vz\n";
-    for (std::size_t i = 0; i < res.velocities.size(); ++i) {
-      const Vec3& v = res.velocities[i];
-      std::snprintf(row, sizeof row, "%zu,%.17g,%.17g,%.17g\n", i + 1, v.x(), v.y(), v.z());
-      vel += row;
-    }
-    write_text_file(velocities.string(), vel);
-  }
+  write_run_tables(res, dir);
   return res;
 }
 

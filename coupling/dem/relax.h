@@ -40,6 +40,7 @@ struct RelaxResult {
                                     // or "max-time"
   double simulated_time = 0.0;      // s
   double wall_seconds = 0.0;
+  double cpu_seconds = 0.0;         // processor time (user + system) of the engine and what it started
   std::vector<std::pair<double, double>> kinetic_history;  // (time, kinetic energy)
   std::vector<Vec3> velocities;     // final translational velocity of each grain, same order as relaxed.grains
   struct Contact { std::int64_t i, j; double fn; };       // j == 0 for a wall

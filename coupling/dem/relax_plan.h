@@ -54,6 +54,18 @@ std::vector<std::string> write_engine_inputs(const Packing& packing, const Scene
                                              const RelaxSettings& settings, const RelaxPlan& plan,
                                              const std::string& dir);
 
+// Runs the inputs already in dir and reads the result back, checked: ids, radii and species kept, finite values,
+// grains inside the container, bounded kinetic energy, a stop reason. Removed grains (open floors) are left out
+// of relaxed.grains, velocities and contacts, and the others renumbered 1..N-k (RelaxResult::removed lists them).
+// Throws EngineFailure ("<engine> <what> failed in DIR: ...", with the tail of the engine's log) or Interrupted.
+RelaxResult run_and_read_back(const Packing& packing, const Scene& scene, const EngineAdapter& adapter,
+                              const std::string& engine, const RelaxSettings& settings, const RelaxPlan& plan,
+                              const std::string& dir, const std::string& what);
+
+// dir/kinetic.csv (time,kinetic_energy), dir/contacts.csv (id1,id2,normal_force; id2 = 0 a wall) and
+// dir/velocities.csv (id,vx,vy,vz; removed when the engine gave none) of a run.
+void write_run_tables(const RelaxResult& res, const std::string& dir);
+
 // Runs the inputs already in dir, reads the result back, checks it (ids, finite values, grains
 // inside the container, bounded kinetic energy) and writes dir/relaxed.{csv,json,vtp},
 // dir/kinetic.csv and dir/contacts.csv. Throws EngineFailure with the tail of the engine's log, after

@@ -197,6 +197,38 @@ std::string data_file(const Packing& packing, const Scene& scene, const Simulati
   return out.str();
 }
 
+// The pour's release (engine_adapter.h, PourRelease): batch k is the group btr_batch (one group at a time:
+// LIGGGHTS allows 32), moved down with displace_atoms to its drop height, added to btr_released (which the
+// integrator and the height of the pile follow) and run for its steps. bound() is evaluated between runs, so no
+// compute has to be current.
+std::string liggghts_release(const PourRelease& pour) {
+  std::ostringstream s;
+  const std::size_t n = pour.batches.size();
+  s << "# Release: " << n << " batches; held grains are not integrated (fixed obstacles) until their batch.\n";
+  for (std::size_t k = 0; k < n; ++k) {
+    const PourRelease::Batch& b = pour.batches[k];
+    s << "group btr_batch id <> " << b.first + 1 << " " << b.last + 1 << "\n"
+      << "variable btr_lo equal bound(btr_batch,zmin)\n";
+    if (k == 0) {
+      s << "variable btr_dz equal " << g17(pour.r_max + pour.drop_gap) << "-v_btr_lo\n";
+    } else {
+      s << "variable btr_dz equal v_btr_top+" << g17(2.0 * pour.r_max + pour.drop_gap) << "-v_btr_lo\n"
+        << "if \"${btr_dz} > 0\" then &\n"
+        << "  \"print 'BTR-FAILURE the pile reached the held lattice: batch " << k + 1
+        << " would move up by ${btr_dz} m'\" quit\n";
+    }
+    s << "displace_atoms btr_batch move 0 0 ${btr_dz} units box\n"
+      << "group btr_released id <> 1 " << b.last + 1 << "\n";
+    if (k == 0)
+      s << "variable btr_top equal bound(btr_released,zmax)\n"
+        << "fix btr_integrate btr_released nve/sphere\n";
+    s << "group btr_batch delete\n"
+      << "print \"BTR-BATCH " << k + 1 << " " << n << "\"\n"
+      << "run " << b.steps << "\n";
+  }
+  return s.str() + "\n";
+}
+
 }  // namespace
 
 std::vector<double> liggghts_damping_gamma(const Grains& grains, const Scene& scene, double damping) {
@@ -283,7 +315,9 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
                              (rolling ? " rolling_friction epsd2" : "");
 
   std::ostringstream s;
-  s << "# btr-dem: LIGGGHTS relaxation of a BTR packing of scene '" << scene.name << "'\n"
+  const PourRelease& pour = plan.pour;
+  s << "# btr-dem: " << (pour.enabled ? "LIGGGHTS reference pour of the grains" : "LIGGGHTS relaxation of a BTR packing")
+    << " of scene '" << scene.name << "'\n"
     << "# " << grains.size() << " grains, " << dim << "D, container " << to_string(scene.container.kind) << "\n"
     << "# Run unchanged with:  liggghts -in " << kLiggghtsScript << "   (or: mpirun -np N liggghts -in "
     << kLiggghtsScript << ")\n"
@@ -303,6 +337,11 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   else
     s << "# the largest grain displacement over the last window is below " << g6(plan.displacement_threshold)
       << " m = stop_displacement * smallest diameter.\n";
+  if (pour.enabled)
+    s << "#\n# Pour: the grains start held on a lattice (not integrated); " << pour.batches.size()
+      << " batches of consecutive ids are released in turn,\n# each moved down until its lowest centre is "
+      << g6(pour.drop_gap) << " m + 2 r_max above the highest released centre, then left to fall;\n"
+      << "# the stop rule runs after the last batch (" << g6(pour.release_time) << " s), max_time counts from there.\n";
   s << "# Otherwise the run stops at max_time " << g6(plan.max_time) << " s (" << sched.max_checks
     << " checks). E above " << g6(sched.blowup_bound) << " J (twice the gravitational and\n"
     << "# elastic energy the packing holds) ends the run as a failure (BTR-FAILURE).\n";
@@ -389,7 +428,7 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   if (clusters)
     s << "fix btr_integrate btr_free nve/sphere\n"
       << "fix btr_rigid btr_clustered rigid molecule\n\n";
-  else
+  else if (!pour.enabled)  // a pour integrates the released grains only (liggghts_release)
     s << "fix btr_integrate all nve/sphere\n\n";
 
   // Rotation is left out on purpose: a grain spinning about its contact normal meets no resistance
@@ -438,7 +477,7 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
     << "variable btr_npairs equal c_btr_ncon_sum/2\n"
     << "variable btr_fcontact equal (c_btr_fpair/2+" << wall_sum
     << ")/(v_btr_npairs+" << wall_count << "+1e-300)\n"
-    << "variable btr_unbalanced equal c_btr_fres/atoms/(v_btr_fcontact+1e-300)\n";
+    << "variable btr_unbalanced equal c_btr_fres/(atoms+1e-300)/(v_btr_fcontact+1e-300)\n";
 
   const bool by_displacement = plan.stop_rule == "displacement";
   if (by_displacement) {
@@ -480,6 +519,7 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
     << "variable btr_tarm equal " << g17(sched.arming_time) << "\n"
     << "variable btr_armed equal 0\n"
     << "print \"BTR time step " << g17(plan.timestep) << " s: " << plan.timestep_rule << "\"\n\n";
+  if (pour.enabled) s << liggghts_release(pour);
   if (compaction.enabled)
     s << liggghts_compaction_loop(compaction, grains, scene, plan.damping, plan.timestep, stop_arming_time(grains));
   s << "label btr_loop\n"

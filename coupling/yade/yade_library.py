@@ -217,10 +217,11 @@ def friction_angles(scale):
 
 
 _ip2 = None  # the Ip2 functor (its frictAngle is replaced when the compaction restores the friction)
+_collider = None  # the collider (a pour's release re-sorts it after moving a batch)
 
 
 def build_engines():
-    global _ip2
+    global _ip2, _collider
     en = MatchMaker(matches=[(a, b, e) for a, b, e, _ in _pairs])
     friction_angle = friction_angles(COMPACTION["friction_scales"][0] if COMPACTION else 1.0)
     if MODEL == "hertz":
@@ -243,6 +244,7 @@ def build_engines():
         # The floor box is wider than the cell: sweep along z, where it is thin.
         collider.allowBiggerThanPeriod = True
         collider.sortAxis = 2
+    _collider = collider
     O.engines = [
         ForceResetter(),
         collider,
@@ -476,6 +478,12 @@ class StopRule:
         self.reference = grain_positions() if STOP_RULE == "displacement" else None
         self.arming_time = ARMING_TIME
         self.compaction = Compaction(self)
+        self.releasing = bool(POUR)  # a pour's release: samples and removals, no decision until its end
+
+    def end_release(self):
+        """The pour's last batch has run (a whole number of check windows): the stop rule starts counting."""
+        self.releasing = False
+        self.total, self.count, self.checks = 0.0, 0, 0
 
     def rearm(self, t):
         """After the compaction: the stop rule starts again, armed after COMPACTION["arming"]."""
@@ -523,8 +531,14 @@ class StopRule:
             return
         mean = self.total / self.samples
         self.total, self.count = 0.0, 0
-        self.checks += 1
         _history.append((t, e))
+        if self.releasing:
+            removed = remove_escaped()
+            if removed:
+                log("t = %.6g s: %d grain(s) left the open floor's region and were removed (%d in all)" % (
+                    t, removed, len(_removed)))
+            return
+        self.checks += 1
         if not math.isfinite(mean):
             raise RunFailure("mean kinetic energy is %r at t = %.6g s (step %d)" % (mean, t, step), "non_finite")
         removed = remove_escaped()
@@ -565,6 +579,44 @@ _rule = None
 _final_unbalanced = None
 
 
+def hold_lattice():
+    """A pour starts with every grain held where yade_packing.csv put it (on the lattice): all its degrees of
+    freedom blocked, so it is not integrated and acts as a fixed obstacle until its batch is released."""
+    for _, bid in _grains:
+        O.bodies[bid].state.blockedDOFs = "xyzXYZ"
+        O.bodies[bid].state.vel = Vector3(0.0, 0.0, 0.0)
+        O.bodies[bid].state.angVel = Vector3(0.0, 0.0, 0.0)
+
+
+def release(rule):
+    """The pour's release (POUR; the LIGGGHTS script's, batch for batch): batch k, the grains of packing ids
+    first..last, is moved down until its lowest centre is drop_gap + 2 r_max above the highest released centre
+    (the first batch: drop_gap + r_max above the floor), freed and run for its steps. A batch that would move up
+    (the pile reached the held lattice) is a failure."""
+    gap, r_max = POUR["drop_gap"], POUR["r_max"]
+    free = "yXZ" if DIMENSION == 2 else ""
+    batches = POUR["batches"]
+    for k, (first, last, steps) in enumerate(batches):
+        batch = [O.bodies[bid] for gid, bid in _grains[first - 1:last] if O.bodies[bid] is not None]
+        released = [O.bodies[bid] for gid, bid in _grains[:first - 1] if O.bodies[bid] is not None]
+        lo = min(b.state.pos[2] for b in batch)
+        if k == 0 or not released:
+            dz = r_max + gap - lo
+        else:
+            dz = max(b.state.pos[2] for b in released) + 2.0 * r_max + gap - lo
+            if dz > 0.0:
+                raise RunFailure("the pile reached the held lattice: batch %d would move up by %.6g m" % (k + 1, dz))
+        for b in batch:
+            b.state.pos = b.state.pos + Vector3(0.0, 0.0, dz)
+            b.state.blockedDOFs = free
+        _collider.doSort = True  # the moved batch's bounds are found anew
+        log("BTR-BATCH %d %d: grains %d..%d moved by %.6g m, %d steps" % (k + 1, len(batches), first, last, dz, steps))
+        O.run(steps, True)
+        if rule.failure is not None:
+            raise rule.failure
+    rule.end_release()
+
+
 def relax():
     """Runs the relaxation in one O.run() call (the StopRule's PyRunner pauses it) and returns the stop
     reason; the wall time of the loop alone is in _loop_seconds."""
@@ -580,6 +632,10 @@ def relax():
             MAX_CHECKS, KINETIC_BOUND, DAMPING))
     if REGION is not None:
         log("open floor: grains leaving x in [%.6g, %.6g], y in [%.6g, %.6g] m are removed" % REGION)
+    if POUR:
+        hold_lattice()
+        log("pour: %d batches from the lattice, drop gap %.6g m; the stop rule runs after the last" % (
+            len(POUR["batches"]), POUR["drop_gap"]))
     _history.append((0.0, sum(0.5 * O.bodies[b].state.mass * O.bodies[b].state.vel.squaredNorm() for _, b in _grains)))
     _rule = StopRule()
     # PyRunner commands run in __main__, which is not this script's namespace under the `yade` launcher.
@@ -590,6 +646,8 @@ def relax():
     O.engines = O.engines + [PyRunner(command="_btr_stop_rule.sample()", iterPeriod=AVERAGE_EVERY,
                                       iterLast=O.iter - 1, nDone=1, label="stop_rule")]
     t0 = time.time()
+    if POUR:
+        release(_rule)
     steps = MAX_CHECKS * STEPS_PER_CHECK
     if COMPACTION:  # each friction scale of the compaction may run up to max_time before the settle's max_time
         steps += len(COMPACTION["friction_scales"]) * COMPACTION["max_samples_per_scale"] * AVERAGE_EVERY

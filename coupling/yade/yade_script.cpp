@@ -178,6 +178,21 @@ std::string compaction_constant(const RelaxPlan& plan, const Grains& grains, con
          ", arming=" + num(stop_arming_time(grains)) + ")\n";
 }
 
+// POUR: None, or a reference pour's release (engine_adapter.h, PourRelease): batches as (first id, last id,
+// steps), the drop gap and the largest radius; yade_library.py's release() runs it before the stop rule.
+std::string pour_constant(const RelaxPlan& plan) {
+  const PourRelease& p = plan.pour;
+  if (!p.enabled) return "POUR = None  # not a pour\n";
+  std::string batches;
+  for (const PourRelease::Batch& b : p.batches)
+    batches += (batches.empty() ? "" : ", ") + std::string("(") + std::to_string(b.first + 1) + ", " +
+               std::to_string(b.last + 1) + ", " + std::to_string(b.steps) + ")";
+  return "POUR = dict(  # btr pour: the grains start held on the lattice; release() frees them batch by batch\n"
+         "    batches=[" + batches + "],  # (first id, last id, steps)\n"
+         "    drop_gap=" + num(p.drop_gap) + ", r_max=" + num(p.r_max) + ")  # m; the settle's max time follows the release (" +
+         num(p.release_time) + " s)\n";
+}
+
 const char* kHeader = R"(#
 # Run it in one of two ways (every file is read from and written to this script's folder):
 #   PYTHONPATH=/usr/lib/x86_64-linux-gnu/yade-double/py OMP_NUM_THREADS=1 /usr/bin/python3 relax_yade.py
@@ -206,6 +221,9 @@ const char* kHeader = R"(#
 # below UNBALANCED_THRESHOLD) or "displacement" (largest displacement since the last check below
 # DISPLACEMENT_THRESHOLD), each from t >= ARMING_TIME; else after MAX_CHECKS checks (max-time).
 # Open floor (REGION): grains whose centre left the region are erased at each check and listed as removed.
+# A reference pour (POUR, `btr pour`): every grain starts held on a lattice (all degrees of freedom blocked);
+# batches of ids are moved down to a small drop height above the pile and freed one after the other, then the
+# stop rule runs (ARMING_TIME lies after the release; MAX_CHECKS counts from its end).
 # The rule runs inside YADE's loop (a PyRunner every AVERAGE_EVERY steps), which pauses YADE when it decides.
 # A run fails on NaN, E above KINETIC_BOUND (checked at every sample), lost bodies, or a grain below the floor.
 # Periodic cells: YADE gives a pair one periodic image, chosen by the collider, and only while each grain's
@@ -263,7 +281,7 @@ std::string yade_script(const Packing& packing, const Scene& scene, const RelaxP
 
   std::ostringstream out;
   out << "#!/usr/bin/python3\n"
-      << "# YADE relaxation of the packing of scene " << py_string(scene.name) << " (" << py_string(scene.file)
+      << (plan.pour.enabled ? "# YADE reference pour of the grains of scene " : "# YADE relaxation of the packing of scene ") << py_string(scene.name) << " (" << py_string(scene.file)
       << "), written by btr " << BTR_VERSION << " (coupling/yade/yade_script.cpp).\n"
       << kHeader << yade_script_library();
   out << "\n\n# " << std::string(100, '-') << "\n# The scene (generated)\n"
@@ -289,7 +307,7 @@ std::string yade_script(const Packing& packing, const Scene& scene, const RelaxP
                                 ", " + num(plan.region_hi[1]) + ")  # open floor: x0, x1, y0, y1 [m]; grains leaving it are removed"
                           : std::string("None  # no removal region (not an open floor)"))
       << "\n"
-      << compaction_constant(plan, packing.grains, sched)
+      << compaction_constant(plan, packing.grains, sched) << pour_constant(plan)
       << "VERLET_DIST = " << num(verlet) << "  # m, collider's bounding-box margin: "
       << (verlet < 0.5 * st.r_min ? "below half the period with the largest grain" : "0.5 r_min") << "\n\n\n"
       << "def scene():\n";

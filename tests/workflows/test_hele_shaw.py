@@ -52,7 +52,7 @@ def test_hele_shaw_tiny(tmp_path, source_dir, btr_binary):
     # m = 2400 pi/6 1e-9 = 1.2566371e-6 kg, kn = 2e3 m g / d = 24.65522 N/m, t0 = sqrt(1e-3/9.81) = 0.01009638 s
     kn, t0 = 24.65522, 0.01009638
     case = out / "cases" / "d1mm_w3"
-    pour = (case / "dem" / "in.pour").read_text()
+    pour = (case / "dem" / "in.btr").read_text()
     relax = (case / "relax" / "in.btr").read_text()
     for script in (pour, relax, ub_script):
         assert "model hooke/stiffness tangential history" in script
@@ -104,7 +104,7 @@ def test_a_failed_method_is_a_row_with_its_reason(tmp_path, btr_binary, liggghts
     assert [s["status"] for s in run["steps"]][-1] == "failed"
     pour = json.loads((out / "cases" / "d1mm_w3" / "dem" / "pour_summary.json").read_text())
     assert pour["seed"] == 2
-    assert "(seed 2)" in (out / "cases" / "d1mm_w3" / "dem" / "pour.data").read_text().splitlines()[0]
+    assert json.loads((out / "cases" / "d1mm_w3" / "dem" / "pour.json").read_text())["settings"]["seed"] == 2
 
 
 def test_paper_material_by_hand():

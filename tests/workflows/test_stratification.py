@@ -49,7 +49,7 @@ def test_stratification_tiny(tmp_path, source_dir, btr_binary):
     # d = 2 mm: m = 1.00531e-5 kg, kn = 98.6209 N/m, gamma_n = 50 / 0.0142785 s = 3501.79 1/s
     kn_s, kn_l, gn_s, gn_l = 24.6552, 98.6209, 4952.27, 3501.79
     for method in ("dem", "dem-rolling"):
-        script = (out / "cases" / f"{method}_seed1" / "dem" / "in.pour").read_text()
+        script = (out / "cases" / f"{method}_seed1" / "dem" / "in.btr").read_text()
         assert "model hooke/stiffness tangential history" in script
         # types 1 = small, 2 = large, 3 = walls (a grain-wall pair takes the grain's value)
         assert np.allclose(_matrix(script, "kn"), [kn_s, (kn_s + kn_l) / 2, kn_s, (kn_s + kn_l) / 2, kn_l, kn_l,

@@ -45,9 +45,11 @@ def load_context(pre: Packing, scene_path: str | None):
 
 
 def without_removed(pre: Packing, post: Packing) -> Packing:
-    """PRE without the grains a relaxation on an open floor removed (POST's JSON relax.removed.ids, ids of
-    PRE), renumbered 1..M as `btr relax` renumbers POST; PRE itself when nothing was removed."""
-    removed = ((post.meta.get("relax") or {}).get("removed") or {}).get("ids") or []
+    """PRE without the grains a relaxation or a pour on an open floor removed (POST's JSON relax.removed.ids or
+    pour.removed.ids, ids of PRE), renumbered 1..M as `btr relax` and `btr pour` renumber POST; PRE itself when
+    nothing was removed."""
+    run = post.meta.get("relax") or post.meta.get("pour") or {}
+    removed = (run.get("removed") or {}).get("ids") or []
     if not removed:
         return pre
     keep = ~np.isin(pre.ids, np.asarray(removed, dtype=np.int64))

@@ -1,4 +1,4 @@
-"""The `btr` program's deposit and relax subcommands, run as subprocesses with progress lines."""
+"""The `btr` program's deposit, relax and pour subcommands, run as subprocesses with progress lines."""
 from __future__ import annotations
 
 import os
@@ -74,6 +74,31 @@ def relax(btr: str, packing_csv: str, engine: str, outdir, np: int = 1, timestep
     if check and out["returncode"] != 0:
         kind = f" ({out['failure']['kind']})" if out["failure"] else ""
         raise StepFailed(f"{label}: btr relax exited with status {res['returncode']}{kind}:\n{out['error'][-3000:]}")
+    return out
+
+
+def pour(btr: str, input_path: str, engine: str, outdir, np: int = 1, time_limit: float | None = None,
+         progress=print, label: str = "pour", extra_args=()) -> dict:
+    """btr pour SCENE.toml|PACKING.csv --engine E -o OUTDIR [extra options]; returns {returncode, wall_seconds,
+    cpu_seconds, csv, error, stdout}. Never raises on a failed run (the caller decides); a stop signal stops it."""
+    if engine not in ENGINES:
+        raise StepFailed(f"pour: engine: expected one of {', '.join(ENGINES)}, got {engine!r}")
+    outdir = Path(outdir).absolute()  # the command runs in outdir: a relative -o would nest
+    outdir.mkdir(parents=True, exist_ok=True)
+    argv = [btr, "pour", os.path.abspath(input_path), "--engine", engine, "-o", str(outdir), "--np", str(np)]
+    if time_limit is not None:
+        argv += ["--time-limit", repr(float(time_limit))]
+    argv += [str(a) for a in extra_args]
+    res = run_command(argv, outdir, label, progress=progress, watch=_engine_log(outdir, engine),
+                      stdout_name=f"{label.replace(' ', '_').replace('/', '_')}.stdout")
+    err = Path(res["stderr"]).read_text(errors="replace").strip()
+    out = {"returncode": res["returncode"], "wall_seconds": res["wall_seconds"], "cpu_seconds": res["cpu_seconds"],
+           "argv": [str(a) for a in argv], "csv": str(outdir / "poured.csv"),
+           "error": err if res["returncode"] != 0 else None,
+           "stdout": Path(res["stdout"]).read_text(errors="replace").strip()}
+    if out["returncode"] == 0 and not (outdir / "poured.csv").exists():
+        out["returncode"] = -1
+        out["error"] = f"btr pour succeeded but wrote no {outdir / 'poured.csv'}"
     return out
 
 
