@@ -10,6 +10,7 @@
 #include <iostream>
 #include <limits>
 
+#include "btr/model/container.h"
 #include "btr/model/number_text.h"
 #include "coupling/dem/dem_walls.h"
 #include "coupling/dem/engine_adapter.h"
@@ -63,8 +64,6 @@ void check_inputs(const Packing& packing, const Scene& scene) {
         throw RelaxRefused("2D packing: grain " + std::to_string(i + 1) + " has y = " + g6(packing.grains[i].x.y()) +
                            " (2D grains lie in the plane y = 0)");
 }
-
-double periodic_wrap(double x, double period) { return x - period * std::floor(x / period + 0.5); }
 
 constexpr std::pair<FailureKind, const char*> kFailureKindNames[] = {
     {FailureKind::EngineError, "engine_error"},       {FailureKind::TimeLimit, "time_limit"},
@@ -380,10 +379,7 @@ RelaxResult run_and_read_back(const Packing& packing, const Scene& scene, const 
     if (scene.dimension == 2 && std::abs(g.x.y()) > 1e-9 * g.r)
       throw failure(FailureKind::OutsideContainer, who + " left the plane y = 0 (y = " + g6(g.x.y()) + " m)",
                     {{"grain", i + 1}, {"y", g.x.y()}});
-    if (c.kind == ContainerKind::Periodic) {
-      g.x.x() = periodic_wrap(g.x.x(), c.size_x);
-      if (scene.dimension == 3) g.x.y() = periodic_wrap(g.x.y(), c.size_y);
-    }
+    g.x = wrap_into_cell(c, scene.dimension, g.x);
     for (const DemWall& w : walls)
       if (w.distance(g.x) < 0.0)
         throw failure(FailureKind::OutsideContainer,
@@ -489,10 +485,9 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
   for (std::size_t i = 0, k = 0; i < in.size(); ++i) {
     if (!kept[i]) continue;
     Vec3 d = out[k++].x - in[i].x;
-    if (c.kind == ContainerKind::Periodic) {
-      d.x() = periodic_wrap(d.x(), c.size_x);
-      if (scene.dimension == 3) d.y() = periodic_wrap(d.y(), c.size_y);
-    }
+    for (int axis : {0, 1})
+      if (const double period = period_along(c, scene.dimension, axis); period > 0.0)
+        d[axis] = minimum_image(d[axis], period);
     displacement.values.push_back(d.norm());
   }
   const OverlapReport final_overlap = largest_overlap(out, scene.dimension, c);

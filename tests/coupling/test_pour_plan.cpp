@@ -99,7 +99,9 @@ TEST(PourPlan, LatticeSitesLieInsideTheContainerWithoutOverlap) {
       EXPECT_EQ(g.r, grains[i].r);
       EXPECT_EQ(g.species, grains[i].species);
       for (const DemWall& w : walls) EXPECT_GE(w.distance(g.x), g.r) << "grain " << i + 1 << " against " << w.name;
-      if (k.dimension == 2) EXPECT_EQ(g.x.y(), 0.0);
+      if (k.dimension == 2) {
+        EXPECT_EQ(g.x.y(), 0.0);
+      }
       if (k.container.kind == ContainerKind::Periodic) {
         EXPECT_LT(std::abs(g.x.x()), 0.5 * k.container.size_x + 1e-15);
         EXPECT_LT(std::abs(g.x.y()), 0.5 * k.container.size_y + 1e-15);
