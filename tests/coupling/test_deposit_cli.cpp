@@ -13,22 +13,11 @@
 
 #include "coupling/io/packing_io.h"
 #include "coupling/io/scene_json.h"
+#include "cli_run.h"
 
 namespace btr {
 namespace {
 namespace fs = std::filesystem;
-
-struct CliRun {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 const fs::path& scratch() {
   static const fs::path d = [] {
@@ -40,16 +29,7 @@ const fs::path& scratch() {
   return d;
 }
 
-CliRun btr(const std::string& args) {
-  const fs::path out = scratch() / "stdout.txt", err = scratch() / "stderr.txt";
-  const std::string cmd = std::string(BTR_BINARY) + " " + args + " >" + out.string() + " 2>" + err.string();
-  CliRun r;
-  const int status = std::system(cmd.c_str());
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(out);
-  r.err = slurp(err);
-  return r;
-}
+CliRun btr(const std::string& args) { return run_btr(args, scratch()); }
 
 const std::string kHeap = std::string(BTR_SOURCE_DIR) + "/inputs/heap2d.toml";
 

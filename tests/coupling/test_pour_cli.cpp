@@ -14,23 +14,12 @@
 #include "coupling/dem/dem_walls.h"
 #include "coupling/io/packing_io.h"
 #include "coupling/io/scene_json.h"
+#include "cli_run.h"
 #include "relax_fixtures.h"
 
 namespace btr {
 namespace {
 namespace fs = std::filesystem;
-
-struct CliRun {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 class PourCli : public ::testing::Test {
  protected:
@@ -41,16 +30,7 @@ class PourCli : public ::testing::Test {
   }
   static void TearDownTestSuite() { fs::remove_all(dir_); }
 
-  static CliRun btr(const std::string& args) {
-    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-    const std::string cmd = std::string(BTR_BINARY) + " " + args + " >" + out.string() + " 2>" + err.string();
-    CliRun r;
-    const int status = std::system(cmd.c_str());
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = slurp(out);
-    r.err = slurp(err);
-    return r;
-  }
+  static CliRun btr(const std::string& args) { return run_btr(args, dir_); }
 
   // A scene file in the scratch folder: `body` follows the [scene] table.
   static std::string scene_file(const std::string& name, const std::string& body, int dimension = 3) {
