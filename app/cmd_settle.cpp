@@ -2,6 +2,7 @@
 // of a bed that stands for pouring the scene, without pouring it (docs/guide/settle.md): the BTR packing, a small
 // periodic calibration pour of the scene's grains whose bulk packing fraction becomes the target, and a DEM
 // relaxation of the BTR packing to that target (coupling/dem/settle_plan.h says what is chosen and why).
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -56,6 +57,10 @@ class StepClock {
   double cpu0_;
   std::chrono::steady_clock::time_point wall0_;
 };
+
+// Simulated seconds the calibration pour may settle after its last batch, at least (a bed of ten largest diameters
+// comes to rest in a few tenths of a second).
+constexpr double kCalibrationSettleTime = 1.0;
 
 void say(const std::string& line) { std::cout << "btr settle: " << line << std::endl; }
 
@@ -114,6 +119,8 @@ int run(const Options& o, const CLI::App& cmd) {
     settings.seed = seed;
     settings.np = o.np;
     settings.wall_time_limit = o.time_limit;
+    // At rest, not cut short by a max time chosen for the user's own relaxation.
+    settings.settle_max_time = std::max(scene.relax.max_time, kCalibrationSettleTime);
     const fs::path dir = out / "calibration";
     btr::PourResult r = btr::pour(grains, cal.scene, engine, settings, dir.string(),
                                   scene_packing_meta(cal.scene, grains, seed, "settle calibration pour"));

@@ -102,6 +102,36 @@ def pour(btr: str, input_path: str, engine: str, outdir, np: int = 1, time_limit
     return out
 
 
+def settle(btr: str, scene_path: str, engine: str, outdir, np: int = 1, seed: int | None = None,
+           count: int | None = None, progress=print, label: str = "settle", extra_args=()) -> dict:
+    """btr settle SCENE --engine E -o OUTDIR; returns {returncode, wall_seconds, cpu_seconds (settle.json's: the
+    calibration included), csv (the settled packing), btr_csv (its BTR packing), record (settle.json), error,
+    stdout}. A refused scene or a failed run raises StepFailed with the program's message; a missed target
+    (exit 6) does not (target_reached False)."""
+    if engine not in ENGINES:
+        raise StepFailed(f"settle: engine: expected one of {', '.join(ENGINES)}, got {engine!r}")
+    outdir = Path(outdir).absolute()
+    outdir.mkdir(parents=True, exist_ok=True)
+    argv = [btr, "settle", os.path.abspath(scene_path), "--engine", engine, "-o", str(outdir), "--np", str(np),
+            "--quiet"]
+    if seed is not None:
+        argv += ["--seed", str(seed)]
+    if count is not None:
+        argv += ["--count", str(count)]
+    argv += [str(a) for a in extra_args]
+    res = run_command(argv, outdir, label, progress=progress, stdout_name=f"{label}.stdout")
+    err = Path(res["stderr"]).read_text(errors="replace").strip()
+    if res["returncode"] not in (0, TARGET_NOT_REACHED):
+        raise StepFailed(f"{label}: btr settle exited with status {res['returncode']}:\n{err[-3000:]}")
+    record = read_json(outdir / "settle.json")
+    name = record["scene_name"]
+    return {"returncode": 0, "target_reached": res["returncode"] == 0, "wall_seconds": res["wall_seconds"],
+            "cpu_seconds": record["cpu_seconds"], "run_cpu_seconds": res["cpu_seconds"],
+            "argv": [str(a) for a in argv], "csv": str(outdir / f"{name}.csv"),
+            "btr_csv": str(outdir / "btr" / f"{name}.csv"), "record": record, "error": None,
+            "stdout": Path(res["stdout"]).read_text(errors="replace").strip()}
+
+
 def failure_record(outdir) -> dict | None:
     """OUTDIR/relax_failure.json of the last `btr relax` into OUTDIR, or None if that run did not fail (btr removes
     the file when a run starts and writes it when the engine fails)."""
