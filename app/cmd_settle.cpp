@@ -155,7 +155,8 @@ int run(const Options& o, const CLI::App& cmd) {
 
   // ---- 3. the relaxation of the BTR packing to the target
   say("3/3 " + engine + " relaxation of the BTR packing to the target");
-  const btr::SettleChoices choices = btr::settle_choices(scene, target, target_from);
+  const btr::SettleChoices choices = btr::settle_choices(
+      scene, target, target_from, btr::bed_depth_in_largest_diameters(btr_packing.grains, scene, target));
   btr::Scene relax_scene = scene;
   relax_scene.relax.stop_rule = choices.stop_rule;
   btr::RelaxSettings settings = choices.settings;
