@@ -18,6 +18,7 @@
 #include "coupling/dem/settle_plan.h"
 #include "coupling/engines.h"
 #include "coupling/io/atomic_file.h"
+#include "engine_command.h"
 #include "measures_json.h"
 #include "packing_meta.h"
 #include "progress.h"
@@ -252,26 +253,7 @@ Runner add_settle_command(CLI::App& app) {
       ->capture_default_str()
       ->check(positive_number());
   cmd->add_flag("--quiet", o->quiet, "no progress bar");
-  return [o, cmd]() -> int {
-    try {
-      return run(*o, *cmd);
-    } catch (const btr::Interrupted& e) {
-      std::cerr << "btr settle: " << e.what() << "\n";
-      return interrupted_exit_code(e.signal());
-    } catch (const btr::EngineFailure& e) {
-      std::cerr << "btr settle: " << e.what() << "\n";
-      return kEngineFailed;
-    } catch (const btr::SceneError& e) {
-      std::cerr << "btr settle: " << e.what() << "\n";
-      return kBadInput;
-    } catch (const btr::RelaxRefused& e) {
-      std::cerr << "btr settle: " << e.what() << "\n";
-      return kBadInput;
-    } catch (const std::exception& e) {
-      std::cerr << "btr settle: " << e.what() << "\n";
-      return kInternalFailure;
-    }
-  };
+  return [o, cmd]() -> int { return run_engine_command("settle", kInternalFailure, [&] { return run(*o, *cmd); }); };
 }
 
 }  // namespace btr_app
