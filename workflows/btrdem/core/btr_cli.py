@@ -129,7 +129,7 @@ def settle(btr: str, scene_path: str, outdir, engine: str = "liggghts", count: i
                 "error": f"{btr} has no settle command (issue 20 is not in this build)"}
     res = run_command(argv, outdir, label, progress=progress, stdout_name=f"{label}.stdout")
     err = Path(res["stderr"]).read_text(errors="replace").strip()
-    name = read_scene_toml(scene_path)["scene"]["name"]
+    name = (read_scene_toml(scene_path).get("scene") or {}).get("name") or Path(scene_path).stem
     rc = res["returncode"]
     out = {"returncode": 0 if rc == TARGET_NOT_REACHED else rc, "exit_status": rc, "refused": rc == REFUSED,
            "target_reached": rc == 0, "wall_seconds": res["wall_seconds"], "cpu_seconds": res["cpu_seconds"],
