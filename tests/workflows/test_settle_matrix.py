@@ -121,7 +121,7 @@ def test_refused_heap_is_a_failed_row_and_the_bed_is_judged(tmp_path, btr_binary
     out = tmp_path / "matrix"
     res = settle_matrix.run_settle_matrix(out, count=400, depth=0.006, heap_count=50, margin=1.0,
                                           only=["heap_open_floor", "bed_mu0.5", "bed_mu0.1"], progress=lambda m: None)
-    failed, bed, heap = res["rows"]  # in the matrix's order: beds, then heaps
+    bed, failed, heap = res["rows"]  # in the matrix's order: bed_mu0.5, bed_mu0.1, then heaps
     assert failed["row"] == "bed_mu0.1" and failed["status"] == "fail" and "status 5" in failed["reason"]
     assert heap["row"] == "heap_open_floor" and heap["status"] == "fail"
     assert "refused the scene (exit 2)" in heap["reason"] and "open floor (a heap) is refused" in heap["reason"]

@@ -128,6 +128,7 @@ def judged_settle(res: dict, ref: dict, margin, ref_seeds: int) -> dict:
            "measured_cpu_seconds": res["cpu_seconds"],
            "cost_ratio": settle_report.cost_ratio(cpu, ref["cpu_seconds"]),
            "target_phi": (record.get("chosen") or {}).get("target_phi"), "chosen": record.get("chosen"),
+           "target_phi_reached": record.get("target_phi"),
            "steps": [{k: s.get(k) for k in ("step", "cpu_seconds", "wall_seconds")} for s in record.get("steps", [])]}
     if cpu is None:
         out["note"] = "settle.json has no cpu_seconds: no cost ratio"

@@ -90,7 +90,7 @@ def markdown(result: dict, fig_name: str | None) -> str:
         tgt = s.get("target_phi") or {}
         table.append([r["row"], report.fmt(s["values"].get("packing_fraction")),
                       report.fmt(s["values"].get("coordination")),
-                      f"{report.fmt(tgt.get('value'))} ({tgt.get('from', '?')})" if tgt else "-"] +
+                      _target_cell(tgt)] +
                      [_judged_cell(s["judged"].get(k)) for k in keys] +
                      ["yes" if s["all_within"] else "no", report.fmt(s.get("cpu_seconds")), report.fmt(s.get("cost_ratio"))])
     lines += ["## `btr settle` against the pours", ""]
@@ -106,6 +106,17 @@ def markdown(result: dict, fig_name: str | None) -> str:
     if fig_name:
         lines += [f"![error / floor per row]({fig_name})", ""]
     return "\n".join(lines)
+
+
+def _target_cell(tgt: dict) -> str:
+    """settle.json's chosen target_phi: its value and where it came from (a text, or btr settle's object with the
+    source and the calibration's grains)."""
+    if not tgt:
+        return "-"
+    src = tgt.get("from", "?")
+    if isinstance(src, dict):
+        src = src.get("source", "?") + (f", {src['grains']} grains" if "grains" in src else "")
+    return f"{report.fmt(tgt.get('value'))} ({src})"
 
 
 def _judged_cell(j) -> str:
