@@ -19,6 +19,7 @@
 #include "coupling/io/packing_io.h"
 #include "coupling/io/scene_json.h"
 #include "measures_json.h"
+#include "packing_meta.h"
 #include "progress.h"
 #include "validators.h"
 
@@ -76,35 +77,13 @@ int run(const Options& o, const CLI::App& cmd) {
   const double metrics_seconds = seconds_since(t_metrics);
 
   // ---- metadata and files
-  std::map<int, std::int64_t> per_species;
-  double r_min = grains.empty() ? 0.0 : grains[0].r, r_max = r_min;
-  for (const btr::Grain& g : grains) {
-    ++per_species[g.species];
-    r_min = std::min(r_min, g.r), r_max = std::max(r_max, g.r);
-  }
-  json counts = json::object();
-  for (const auto& [species, k] : per_species) counts[std::to_string(species)] = k;
-  const json scene_json = btr::scene_to_json(scene);
-
-  packing.meta = {
-      {"program", "btr"},
-      {"version", BTR_VERSION},
-      {"command", "deposit"},
-      {"scene_name", scene.name},
-      {"scene_file", scene.file},
-      {"scene", scene_json},
-      {"seed", seed},
-      {"dimension", scene.dimension},
-      {"container", scene_json["container"]},
-      {"count", n},
-      {"counts", counts},
-      {"radius_min", r_min},
-      {"radius_max", r_max},
+  packing.meta = scene_packing_meta(scene, grains, seed, "deposit");
+  packing.meta.update({
       {"timings", {{"deposition", result.wall_seconds}, {"check", o.check ? json(check_seconds) : json(nullptr)},
                    {"measures", metrics_seconds}, {"writing", nullptr}}},
       {"check", check_json},
       {"measures", measures_to_json(measures)},
-  };
+  });
   auto t_write = std::chrono::steady_clock::now();
   std::vector<double> z(measures.coordination.begin(), measures.coordination.end());
   btr::write_packing(o.out, name, packing, {{"coordination", std::move(z)}});

@@ -1,11 +1,8 @@
 // `btr pour SCENE.toml|PACKING.csv -o DIR [--engine liggghts|yade]`: the reference DEM pour of a scene's grains
 // (the drops `btr deposit` would place, same scene and seed) or of a packing's grains, written as
 // DIR/poured.{csv,json,vtp} with the record DIR/pour.json (coupling/dem/pour.h).
-#include <sys/resource.h>
-
 #include <filesystem>
 #include <iostream>
-#include <map>
 #include <memory>
 #include <optional>
 
@@ -20,6 +17,7 @@
 #include "coupling/io/scene_json.h"
 #include "load_packing.h"
 #include "measures_json.h"
+#include "packing_meta.h"
 #include "validators.h"
 
 namespace btr_app {
@@ -37,40 +35,6 @@ struct Options {
 
 bool is_packing(const std::string& path) { return std::filesystem::path(path).extension() == ".csv"; }
 
-// The scene's drops in order, as `btr deposit` draws them (btr/placement/drops.h): radii and species only.
-btr::Grains scene_grains(const btr::Scene& scene, std::uint64_t seed) {
-  if (scene.clusters)
-    throw btr::SceneError(scene.file + ": [clusters]: the pour releases single grains, not rigid clusters");
-  btr::DropSequence drops(scene, seed);
-  btr::Grains grains(static_cast<std::size_t>(drops.count()));
-  for (btr::Grain& g : grains) {
-    const btr::Drop d = drops.next();
-    g.x = btr::Vec3::Zero();
-    g.r = d.r;
-    g.species = d.species;
-  }
-  return grains;
-}
-
-json base_meta(const btr::Scene& scene, const btr::Grains& grains, std::uint64_t seed) {
-  std::map<int, std::int64_t> per_species;
-  for (const btr::Grain& g : grains) ++per_species[g.species];
-  json counts = json::object();
-  for (const auto& [species, k] : per_species) counts[std::to_string(species)] = k;
-  const json scene_json = btr::scene_to_json(scene);
-  return {{"program", "btr"},        {"version", BTR_VERSION},       {"command", "pour"},
-          {"scene_name", scene.name}, {"scene_file", scene.file},     {"scene", scene_json},
-          {"seed", seed},             {"dimension", scene.dimension}, {"container", scene_json["container"]},
-          {"counts", counts}};
-}
-
-double own_cpu_seconds() {
-  rusage u{};
-  ::getrusage(RUSAGE_SELF, &u);
-  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
-         1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
-}
-
 int run(Options& o, const CLI::App& cmd) {
   btr::Scene scene;
   btr::Grains grains;
@@ -84,7 +48,7 @@ int run(Options& o, const CLI::App& cmd) {
     scene = p.scene;
     const std::uint64_t seed = cmd.count("--seed") ? o.seed : scene.seed;
     grains = p.packing.grains;
-    meta = base_meta(scene, grains, seed);
+    meta = scene_packing_meta(scene, grains, seed, "pour");
     meta["source_packing"] = std::filesystem::absolute(o.input).string();
     o.settings.seed = seed;
     source = std::move(p.packing);
@@ -95,8 +59,8 @@ int run(Options& o, const CLI::App& cmd) {
     if (cmd.count("--count")) btr::check_count_fits(scene, count, "--count");
     scene.seed = seed;  // the stored scene rebuilds exactly these grains
     scene.grains.count = count;
-    grains = scene_grains(scene, seed);
-    meta = base_meta(scene, grains, seed);
+    grains = btr::scene_drop_grains(scene, seed);
+    meta = scene_packing_meta(scene, grains, seed, "pour");
     o.settings.seed = seed;
   }
   if (cmd.count("--stop-ratio")) o.settings.stop_ratio = o.stop_ratio;

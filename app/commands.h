@@ -31,5 +31,6 @@ Runner add_shake_command(CLI::App& app);
 Runner add_drum_command(CLI::App& app);
 Runner add_redeposit_command(CLI::App& app);
 Runner add_pour_command(CLI::App& app);
+Runner add_settle_command(CLI::App& app);
 
 }  // namespace btr_app

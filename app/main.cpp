@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   remember(btr_app::add_relax_command(app));
   remember(btr_app::add_export_command(app));
   remember(btr_app::add_pour_command(app));
+  remember(btr_app::add_settle_command(app));
   remember(btr_app::add_measure_command(app));
   remember(btr_app::add_shake_command(app));
   remember(btr_app::add_redeposit_command(app));

@@ -3,7 +3,7 @@
 
   compare PRE.csv POST.csv -o OUTDIR      structure before/after, displacements, nonphysical BTR configurations
   pour PACKING.csv -o OUTDIR [--seed N]   reference DEM pour of a BTR packing's grains (btr pour)
-  pipeline [SCENE] [-o OUTDIR]            BTR -> DEM relaxation -> comparison -> report (default inputs/bed3d.toml)
+  pipeline [SCENE] [-o OUTDIR]            btr settle -> comparison -> report (default inputs/bed3d.toml)
   error-vs-runtime SCENE [-o OUTDIR]      error of BTR, BTR + relaxation and DEM pours against a pour reference
   stability [-o OUTDIR] [--tiny|--full]   stiff/extreme cases run to rest; stable-step margin by bisection
   brazil-nut [-o OUTDIR] [--tiny]         intruder rise under dynamic BTR shaking, Phi sweep, 3D and 2D
@@ -89,13 +89,15 @@ def main(argv=None) -> int:
     p.add_argument("--pace", type=float, default=1.0, help="batch interval / batch fall time (default 1)")
     p.add_argument("--stop-ratio", type=float, help="kinetic stop ratio (default: the scene's)")
 
-    pl = sub.add_parser("pipeline", help="BTR -> DEM relaxation -> comparison -> report")
+    pl = sub.add_parser("pipeline", help="btr settle (BTR -> calibration pour -> DEM relaxation) -> comparison -> report")
     pl.add_argument("scene", nargs="?", default=str(DEFAULT_SCENE))
     pl.add_argument("-o", "--out", help="output folder (default out/<scene name>)")
     pl.add_argument("--engine", choices=["liggghts", "yade"], default="liggghts")
     pl.add_argument("--np", type=int, default=1)
     pl.add_argument("--seed", type=int)
     pl.add_argument("--count", type=int)
+    pl.add_argument("--calibration-grains", type=int,
+                    help="grains of settle's calibration pour (default: btr settle's; fewer is cheaper and noisier)")
 
     e = sub.add_parser("error-vs-runtime", help="error against run time of BTR, BTR + relaxation and DEM pours")
     e.add_argument("scene")
@@ -220,7 +222,8 @@ def main(argv=None) -> int:
             rec.finish(summary)
         elif args.command == "pipeline":
             from btrdem.studies.pipeline import run_pipeline
-            run_pipeline(args.scene, args.out, args.engine, args.np, args.seed, args.count, progress)
+            run_pipeline(args.scene, args.out, args.engine, args.np, args.seed, args.count, progress,
+                         calibration_grains=args.calibration_grains)
         elif args.command == "error-vs-runtime":
             from btrdem.studies.error_runtime import run_error_vs_runtime, run_size_study
             if args.target_phi != "pour":

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The README's main command: BTR -> LIGGGHTS relaxation -> comparison -> report on the default
+"""The README's main command: btr settle (BTR -> calibration pour -> LIGGGHTS relaxation) -> comparison -> report on the default
 scene inputs/bed3d.toml, into out/bed3d/. Extra arguments go to `btr_workflow.py pipeline`
 (e.g. --np 2, --count 2000)."""
 import sys

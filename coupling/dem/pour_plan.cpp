@@ -8,6 +8,7 @@
 #include <random>
 
 #include "btr/model/number_text.h"
+#include "btr/placement/drops.h"
 #include "coupling/dem/check_schedule.h"
 #include "coupling/dem/dem_walls.h"
 #include "coupling/dem/materials.h"
@@ -258,6 +259,20 @@ RelaxPlan make_pour_plan(const PourLattice& lattice, const Scene& pour, const Po
         plan.region_hi[a] = std::max(plan.region_hi[a], x.x[a] + x.r + margin);
   }
   return plan;
+}
+
+Grains scene_drop_grains(const Scene& scene, std::uint64_t seed) {
+  if (scene.clusters)
+    throw RelaxRefused(scene.file + ": [clusters]: the pour releases single grains, not rigid clusters");
+  DropSequence drops(scene, seed);
+  Grains grains(static_cast<std::size_t>(drops.count()));
+  for (Grain& g : grains) {
+    const Drop d = drops.next();
+    g.x = Vec3::Zero();
+    g.r = d.r;
+    g.species = d.species;
+  }
+  return grains;
 }
 
 }  // namespace btr

@@ -27,6 +27,10 @@ struct PourSettings {
   double wall_time_limit = 7200.0;          // s; the engine is killed past this
 };
 
+// The grains a scene drops, in order, as `btr deposit` draws them (btr/placement/drops.h): radii and species,
+// positions at the origin. Throws SceneError (the drop sequence) or RelaxRefused for rigid clusters.
+Grains scene_drop_grains(const Scene& scene, std::uint64_t seed);
+
 // Lattice spacing in largest radii: neighbours sit 2.2 r_max apart, so no jitter makes two grains touch.
 inline constexpr double kPourSpacing = 2.2;
 // Each coordinate is moved by a uniform draw in [-j, j], j = this fraction of the spacing.

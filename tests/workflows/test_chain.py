@@ -1,4 +1,5 @@
-"""The README's chain (BTR -> relaxation -> comparison -> report) on a small scene, with each real engine."""
+"""The README's chain (btr settle: BTR -> calibration pour -> relaxation; comparison -> report) on a small scene,
+with each real engine."""
 import json
 from pathlib import Path
 import subprocess
@@ -14,18 +15,20 @@ from scenes import tiny_bed_toml
 
 @pytest.mark.parametrize("engine", ["liggghts", "yade"])
 def test_pipeline_with_each_engine(tmp_path, source_dir, btr_binary, engine):
-    scene = tiny_bed_toml(tmp_path / "chain.toml", count=300, max_time=0.03, engine=engine)  # deep enough for a bulk window
+    scene = tiny_bed_toml(tmp_path / "chain.toml", count=300, max_time=0.2, engine=engine)  # deep enough for a bulk window
     out = tmp_path / "out"
     p = subprocess.run([sys.executable, str(source_dir / "workflows" / "btr_workflow.py"), "pipeline", scene,
-                        "--engine", engine, "-o", str(out)], capture_output=True, text=True, timeout=300)
+                        "--engine", engine, "-o", str(out), "--calibration-grains", "300"],
+                       capture_output=True, text=True, timeout=300)
     assert p.returncode == 0, p.stdout + p.stderr
-    assert "== relax" in p.stdout and "pipeline: done" in p.stdout  # progress lines
+    assert "== settle" in p.stdout and "pipeline: done" in p.stdout  # progress lines
     run = json.loads((out / "run.json").read_text())
     assert run["status"] == "ok"
-    assert [s["name"] for s in run["steps"]] == ["deposit", f"relax ({engine})", "compare", "report"]
+    assert [s["name"] for s in run["steps"]] == [f"settle ({engine})", "compare", "report"]
     assert all(s["status"] == "ok" and s["wall_seconds"] >= 0 for s in run["steps"])
     assert run["versions"]["btr"] and (out / "inputs" / "chain.toml").exists()
-    btr, relaxed = read_packing(out / "btr" / "btr.csv"), read_packing(out / "relax" / "relaxed.csv")
+    settle = out / "settle"
+    btr, relaxed = read_packing(settle / "btr" / "chain.csv"), read_packing(settle / "chain.csv")
     res = json.loads((out / "compare" / "compare.json").read_text())
     # the reported displacements are those of the two files (nearest periodic image)
     L = 0.007
@@ -38,17 +41,22 @@ def test_pipeline_with_each_engine(tmp_path, source_dir, btr_binary, engine):
     assert np.allclose(vtp["displacement"], disp) and np.allclose(vtp["points"], relaxed.pos)
     report = (out / "report.md").read_text()
     assert "grains moved > 0.1 d" in report and engine in report
-    # One definition of each measure: btr.json (deposit), relaxed.json (relax) and compare.json hold the
+    # the report's costs are settle.json's, and its total is at least the steps' engine time
+    record = json.loads((settle / "settle.json").read_text())
+    assert f"| total | {report_fmt(record['cpu_seconds'])} |" in report
+    assert record["cpu_seconds"] >= sum(s["engine_cpu_seconds"] for s in record["steps"]) > 0
+    assert f"Target bulk packing fraction {report_fmt(record['chosen']['target_phi']['value'])}" in report
+    # One definition of each measure: the BTR packing's JSON, the settled packing's and compare.json hold the
     # same measures of the same packing, to the last digit.
-    btr_json = json.loads((out / "btr" / "btr.json").read_text())["measures"]
-    relaxed_json = json.loads((out / "relax" / "relaxed.json").read_text())["measures"]
+    btr_json = json.loads((settle / "btr" / "chain.json").read_text())["measures"]
+    relaxed_json = json.loads((settle / "chain.json").read_text())["measures"]
     assert res["structure"]["pre"] == btr_json
     assert res["structure"]["post"] == relaxed_json
     assert relaxed_json != btr_json  # the relaxed packing was measured itself, not copied from the deposit
     assert btr_json["bulk"]["valid"] and relaxed_json["bulk"]["valid"]
     # the contact rule counts the grain-grain contacts the engine itself reports (id2 = 0: the floor):
     # exactly for LIGGGHTS; YADE also keeps a few interactions whose grains have just parted
-    pairs = np.genfromtxt(out / "relax" / "contacts.csv", delimiter=",", names=True)
+    pairs = np.genfromtxt(settle / "relax" / "contacts.csv", delimiter=",", names=True)
     grain_pairs = int(np.count_nonzero(pairs["id2"] > 0))
     assert relaxed_json["mean_coordination_all_grains"] == pytest.approx(
         2 * grain_pairs / len(relaxed), rel=1e-12 if engine == "liggghts" else 0.01)
@@ -64,11 +72,11 @@ def test_failed_step_keeps_earlier_outputs(tmp_path, source_dir, btr_binary):
                         "-o", str(out)], capture_output=True, text=True, timeout=300,
                        env={"BTR_BINARY": btr_binary, "PATH": "/nonexistent"})
     assert p.returncode == 3
-    assert "FAILED: relax (liggghts)" in p.stderr
+    assert "FAILED: settle (liggghts)" in p.stderr
     run = json.loads((out / "run.json").read_text())
-    assert run["status"] == "failed" and run["failed_step"] == "relax (liggghts)"
-    assert run["steps"][0]["status"] == "ok" and run["steps"][1]["error"]
-    assert (out / "btr" / "btr.csv").exists()
+    assert run["status"] == "failed" and run["failed_step"] == "settle (liggghts)"
+    assert run["steps"][0]["error"]
+    assert (out / "settle" / "btr" / "chain.csv").exists()  # the BTR packing made before the engine failed
 
 
 def test_relative_output_folders_are_not_nested(tmp_path, source_dir, btr_binary, monkeypatch):

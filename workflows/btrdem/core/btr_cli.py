@@ -1,4 +1,4 @@
-"""The `btr` program's deposit, relax, pour and settle subcommands, run as subprocesses with progress lines."""
+"""The `btr` program's deposit, relax and pour subcommands, run as subprocesses with progress lines."""
 from __future__ import annotations
 
 import os
@@ -6,7 +6,7 @@ import shutil
 import subprocess
 from pathlib import Path
 
-from .io import InputError, read_json, read_packing, read_scene_toml, write_json, write_scene_toml
+from .io import InputError, read_json, read_packing, write_json, write_scene_toml
 from .runner import StepFailed, run_command
 
 ENGINES = ("liggghts", "yade")
@@ -17,10 +17,6 @@ TARGET_NOT_REACHED = 6
 # blow_up, non_finite, lost_grains, outside_container, missed_contact, bad_output; docs/faults.md).
 ENGINE_FAILED = 5
 FAILURE_FILE = "relax_failure.json"
-# `btr settle` exit code: the scene was refused (a heap, a Hele-Shaw cell, a drum...) or an input was bad; the
-# reason is on stderr.
-REFUSED = 2
-SETTLE_FILE = "settle.json"
 PREDICTED_OVERLAP_FILE = "predicted_overlap.json"
 
 
@@ -106,50 +102,34 @@ def pour(btr: str, input_path: str, engine: str, outdir, np: int = 1, time_limit
     return out
 
 
-def settle(btr: str, scene_path: str, outdir, engine: str = "liggghts", count: int | None = None,
-           seed: int | None = None, np: int = 1, progress=print, label: str = "settle") -> dict:
-    """btr settle SCENE -o OUTDIR --engine E [--count N] [--seed N] --np N: the pour-equivalent packing (deposit,
-    calibration pour, relaxation to its packing fraction). Returns {returncode, refused, target_reached,
-    wall_seconds, cpu_seconds, csv (OUTDIR/NAME.csv, NAME the scene's [scene] name), record (settle.json or None),
-    error (stderr of a failed run)}. Exit 6 (target not reached) still wrote the packing: returncode 0 and
-    target_reached False. Never raises on a failed run: require_settled(result) does."""
+def settle(btr: str, scene_path: str, engine: str, outdir, np: int = 1, seed: int | None = None,
+           count: int | None = None, progress=print, label: str = "settle", extra_args=()) -> dict:
+    """btr settle SCENE --engine E -o OUTDIR; returns {returncode, wall_seconds, cpu_seconds (settle.json's: the
+    calibration included), csv (the settled packing), btr_csv (its BTR packing), record (settle.json), error,
+    stdout}. A refused scene or a failed run raises StepFailed with the program's message; a missed target
+    (exit 6) does not (target_reached False)."""
     if engine not in ENGINES:
         raise StepFailed(f"settle: engine: expected one of {', '.join(ENGINES)}, got {engine!r}")
-    outdir = Path(outdir).absolute()  # the command runs in outdir: a relative -o would nest
+    outdir = Path(outdir).absolute()
     outdir.mkdir(parents=True, exist_ok=True)
-    argv = [btr, "settle", os.path.abspath(scene_path), "-o", str(outdir), "--engine", engine, "--np", str(np)]
-    if count is not None:
-        argv += ["--count", str(count)]
+    argv = [btr, "settle", os.path.abspath(scene_path), "--engine", engine, "-o", str(outdir), "--np", str(np),
+            "--quiet"]
     if seed is not None:
         argv += ["--seed", str(seed)]
-    (outdir / SETTLE_FILE).unlink(missing_ok=True)  # a record left by an earlier run must not pass for this one's
-    if not has_command(btr, "settle"):
-        return {"returncode": -1, "exit_status": None, "refused": False, "target_reached": False, "wall_seconds": 0.0,
-                "cpu_seconds": 0.0, "argv": [str(a) for a in argv], "csv": None, "record": None,
-                "error": f"{btr} has no settle command (issue 20 is not in this build)"}
+    if count is not None:
+        argv += ["--count", str(count)]
+    argv += [str(a) for a in extra_args]
     res = run_command(argv, outdir, label, progress=progress, stdout_name=f"{label}.stdout")
     err = Path(res["stderr"]).read_text(errors="replace").strip()
-    name = (read_scene_toml(scene_path).get("scene") or {}).get("name") or Path(scene_path).stem
-    rc = res["returncode"]
-    out = {"returncode": 0 if rc == TARGET_NOT_REACHED else rc, "exit_status": rc, "refused": rc == REFUSED,
-           "target_reached": rc == 0, "wall_seconds": res["wall_seconds"], "cpu_seconds": res["cpu_seconds"],
-           "argv": [str(a) for a in argv], "csv": str(outdir / f"{name}.csv"),
-           "record": read_json(outdir / SETTLE_FILE) if (outdir / SETTLE_FILE).exists() else None,
-           "error": err if rc not in (0, TARGET_NOT_REACHED) else None}
-    if out["returncode"] == 0 and not Path(out["csv"]).exists():
-        out["returncode"] = -1
-        out["error"] = f"btr settle exited with status {rc} but wrote no {out['csv']}"
-    return out
-
-
-def require_settled(res: dict, label: str = "settle") -> None:
-    """StepFailed with btr settle's reason unless the run wrote its packing (exit 0, or 6: target not reached)."""
-    if res["returncode"] == 0:
-        return
-    what = {REFUSED: "refused the scene", ENGINE_FAILED: "engine failed", None: "did not run"}.get(res["exit_status"],
-                                                                                                    "failed")
-    lines = [x.strip() for x in (res["error"] or "").splitlines() if x.strip()]
-    raise StepFailed(f"{label}: btr settle {what} (exit {res['exit_status']}): " + (" ".join(lines[-3:]) or "no message"))
+    if res["returncode"] not in (0, TARGET_NOT_REACHED):
+        raise StepFailed(f"{label}: btr settle exited with status {res['returncode']}:\n{err[-3000:]}")
+    record = read_json(outdir / "settle.json")
+    name = record["scene_name"]
+    return {"returncode": 0, "target_reached": res["returncode"] == 0, "wall_seconds": res["wall_seconds"],
+            "cpu_seconds": record["cpu_seconds"], "run_cpu_seconds": res["cpu_seconds"],
+            "argv": [str(a) for a in argv], "csv": str(outdir / f"{name}.csv"),
+            "btr_csv": str(outdir / "btr" / f"{name}.csv"), "record": record, "error": None,
+            "stdout": Path(res["stdout"]).read_text(errors="replace").strip()}
 
 
 def failure_record(outdir) -> dict | None:
@@ -222,13 +202,6 @@ def scaled_variant(packing_csv: str, outdir, name: str, factor: float, scene_edi
 
     write_packing(outdir, name, p, vtp=False)
     return str(Path(outdir) / f"{name}.csv")
-
-
-def has_command(btr: str, command: str) -> bool:
-    """Whether `btr --help` lists the subcommand."""
-    p = subprocess.run([btr, "--help"], capture_output=True, text=True, timeout=60)
-    listed = p.stdout.split("Subcommands:", 1)[-1].splitlines()
-    return any(line.startswith("  ") and line.split()[:1] == [command] for line in listed)
 
 
 def help_text(btr: str, command: str) -> str:

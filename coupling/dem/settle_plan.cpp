@@ -1,0 +1,112 @@
+#include "coupling/dem/settle_plan.h"
+
+#include <cmath>
+
+#include "btr/model/number_text.h"
+#include "btr/placement/drops.h"
+#include "coupling/dem/relax_plan.h"
+
+namespace btr {
+namespace {
+
+[[noreturn]] void refuse(const Scene& scene, const std::string& field, const std::string& why) {
+  throw RelaxRefused((scene.file.empty() ? "scene '" + scene.name + "'" : scene.file) + ": " + field + ": " + why);
+}
+
+const char* kHeapReason =
+    "btr settle serves beds only; a heap's angle after a DEM relaxation of its BTR packing is not yet a pour's "
+    "(docs/guide/settle.md, \"What it refuses\"): pour it with `btr pour`";
+
+}  // namespace
+
+void check_settle_scene(const Scene& scene) {
+  if (scene.clusters) refuse(scene, "[clusters]", "btr settle releases single grains, not rigid clusters");
+  if (scene.drum) refuse(scene, "[drum]", "a rotating drum is dynamic BTR, not a bed at rest");
+  if (scene.shaking) refuse(scene, "[shaking]", "a shaken packing is dynamic BTR, not a poured bed");
+  if (scene.intruder)
+    refuse(scene, "[intruder]", "the calibration pour holds the scene's bed grains only; an intruder is not served");
+  switch (scene.container.kind) {
+    case ContainerKind::Periodic:
+    case ContainerKind::Box:
+    case ContainerKind::Cylinder: break;
+    case ContainerKind::Open: refuse(scene, "container.kind", std::string("\"open\" floor: a heap. ") + kHeapReason);
+    case ContainerKind::HeleShaw:
+      refuse(scene, "container.kind",
+             "\"hele-shaw\": the plates set the packing across the whole gap, which a periodic calibration cell "
+             "does not have, and the cell's scenes are heaps. " + std::string(kHeapReason));
+    case ContainerKind::Drum: refuse(scene, "container.kind", "\"drum\": dynamic BTR, not a bed at rest");
+  }
+  if (scene.source.kind != SourceSpec::Kind::Rain)
+    refuse(scene, "source.kind",
+           "expected \"rain\" (a bed over the whole container); a point or region source builds a heap, a list "
+           "source places given positions. " + std::string(kHeapReason));
+}
+
+CalibrationPlan calibration_plan(const Scene& scene, std::int64_t grains) {
+  CalibrationPlan plan;
+  const int dim = scene.dimension;
+  const std::vector<double> fraction = number_fractions(scene.grains, dim);
+  double mean_volume = 0.0;
+  for (std::size_t c = 0; c < scene.grains.components.size(); ++c) {
+    const RadiusSpec& r = scene.grains.components[c].radius;
+    mean_volume += fraction[c] * (dim == 3 ? 4.0 / 3.0 * M_PI * radius_moment(r, 3) : M_PI * radius_moment(r, 2));
+  }
+  Scene cell = scene;
+  cell.name = scene.name + "_calibration";
+  cell.container = Container{};
+  cell.container.kind = ContainerKind::Periodic;
+  cell.source = SourceSpec{};
+  cell.source.kind = SourceSpec::Kind::Rain;
+  cell.relax.target_phi.reset();
+  const double d_max = 2.0 * DropSequence(cell, scene.seed).r_max();
+  plan.largest_diameter = d_max;
+  plan.mean_grain_volume = mean_volume;
+  plan.width = (dim == 3 ? kCalibrationWidth3d : kCalibrationWidth2d) * d_max;
+  cell.container.size_x = plan.width;
+  cell.container.size_y = dim == 3 ? plan.width : 0.0;
+  if (grains > 0) {
+    if (grains < kMinCalibrationGrains)
+      throw RelaxRefused("--calibration-grains: expected at least " + std::to_string(kMinCalibrationGrains) +
+                         " grains (fewer leave the bulk window nearly empty), got " + std::to_string(grains));
+    plan.grains = grains;
+  } else {
+    const double footprint = dim == 3 ? plan.width * plan.width : plan.width;
+    const double phi = dim == 3 ? kCalibrationSizingPhi3d : kCalibrationSizingPhi2d;
+    plan.grains = static_cast<std::int64_t>(std::ceil(phi * footprint * kCalibrationDepth * d_max / mean_volume));
+  }
+  cell.grains.count = plan.grains;
+  plan.scene = cell;
+  return plan;
+}
+
+SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohmann::json& target_from) {
+  SettleChoices c;
+  c.settings.target_phi = target_phi;
+  c.settings.damping = c.damping;
+  c.settings.target_margin = kCalibrationMargin;  // the target is measured in the same window as the calibration
+  // YADE's local damping lets the bed collapse faster than LIGGGHTS' viscous damping of the same value
+  // (docs/guide/relax.md, "Target packing fraction"): each engine keeps the compaction damping measured for it.
+  const bool yade = scene.relax.engine == "yade";
+  const double compaction_damping = yade ? 0.5 : scene.relax.compaction_damping;
+  c.settings.compaction_damping = compaction_damping;
+  c.record = {
+      {"target_phi", {{"value", target_phi}, {"from", target_from}}},
+      {"compaction_damping",
+       {{"value", compaction_damping},
+        {"from", yade ? "btr settle's YADE compaction damping (its local damping collapses a bed faster than "
+                        "LIGGGHTS' viscous damping of the same value; docs/guide/relax.md)"
+                      : "the scene's relax.compaction_damping (btr's default 0.15 unless the scene sets it)"}}},
+      {"target_margin",
+       {{"value", kCalibrationMargin},
+        {"from", "the calibration's bulk window: largest diameters from the floor, walls and surface"}}},
+      {"friction_scales", {{"value", scene.relax.friction_scales}, {"from", "the scene's relax.friction_scales"}}},
+      {"damping", {{"value", c.damping}, {"from", "btr settle: quasi-static settle after the compaction"}}},
+      {"stop_rule",
+       {{"value", c.stop_rule},
+        {"from", "btr settle: unbalanced force below the scene's relax.stop_unbalanced_force (" +
+                     g6(scene.relax.stop_unbalanced_force) + ")"}}},
+  };
+  return c;
+}
+
+}  // namespace btr

@@ -1,0 +1,160 @@
+// `btr settle` as a user runs it: a tiny 2D bed settled for real in LIGGGHTS and in YADE (ids kept, the cost
+// record adds up, the target comes from the calibration and is reached, no overlap beyond the contact law's,
+// every grain above the floor, the engine's input of the settled packing written), and the refusals (exit 2,
+// naming the file and the field, nothing written).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "cli_run.h"
+#include "coupling/dem/overlap.h"
+#include "coupling/dem/relax_target.h"
+#include "coupling/io/packing_io.h"
+#include "coupling/io/scene_json.h"
+#include "relax_fixtures.h"
+
+namespace btr {
+namespace {
+namespace fs = std::filesystem;
+
+class SettleCli : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = fs::temp_directory_path() / ("btr_settle_cli_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  static void TearDownTestSuite() { fs::remove_all(dir_); }
+  static CliRun btr(const std::string& args) { return run_btr(args, dir_); }
+  static std::string scene_file(const std::string& name, const std::string& body) {
+    const fs::path p = dir_ / (name + ".toml");
+    std::ofstream(p) << "[scene]\nname = \"" << name << "\"\n" << body;
+    return p.string();
+  }
+  static fs::path dir_;
+};
+
+fs::path SettleCli::dir_;
+
+// 300 disks of radius 0.4-0.5 mm rained into a periodic line 3 cm long: a bed about 10 diameters deep.
+const char* kTinyBed = R"(dimension = 2
+seed = 4
+
+[grains]
+count = 300
+density = 2500.0
+radius = { distribution = "uniform", min = 0.4e-3, max = 0.5e-3 }
+
+[container]
+kind = "periodic"
+size = [0.03]
+
+[source]
+kind = "rain"
+
+[material]
+young = 5e6
+poisson = 0.3
+restitution = 0.3
+friction = 0.5
+
+[relax]
+model = "hertz"
+max_time = 0.5
+stop_kinetic_ratio = 1e-6
+timestep_fraction = 0.2
+)";
+
+TEST_F(SettleCli, TinyBedInLiggghtsAndYade) {
+  const std::string scene_path = scene_file("tiny_bed", kTinyBed);
+  for (const std::string engine : {"liggghts", "yade"}) {
+    SCOPED_TRACE(engine);
+    if (!btr_test::have_engine(engine)) {
+      ADD_FAILURE() << engine << " is not installed";
+      continue;
+    }
+    const fs::path out = dir_ / ("settle_" + engine);
+    const CliRun r = btr("settle " + scene_path + " -o " + out.string() + " --engine " + engine + " --quiet");
+    ASSERT_EQ(r.code, 0) << r.out << r.err;
+    const Packing btr_packing = read_packing((out / "btr" / "tiny_bed.csv").string());
+    const Packing settled = read_packing((out / "tiny_bed.csv").string());
+    const Scene scene = scene_from_json(settled.meta["scene"], "tiny_bed.json");
+
+    // ids kept: grain i of the settled packing is grain i of the BTR packing
+    ASSERT_EQ(settled.grains.size(), 300u);
+    ASSERT_EQ(btr_packing.grains.size(), 300u);
+    for (std::size_t i = 0; i < settled.grains.size(); ++i) {
+      EXPECT_EQ(settled.grains[i].r, btr_packing.grains[i].r) << "grain " << i + 1;
+      EXPECT_GT(settled.grains[i].x.z(), 0.9 * settled.grains[i].r) << "grain " << i + 1 << " below the floor";
+    }
+    // no overlap beyond the contact law's: soft grains under ten layers sink in by far less than 1 % of a radius
+    EXPECT_LT(largest_overlap(settled.grains, 2, scene.container).largest, 0.01);
+
+    // the record: steps in order, each with its times, the total at least their sum of engine time
+    const nlohmann::json rec = nlohmann::json::parse(slurp(out / "settle.json"));
+    EXPECT_EQ(rec["engine"], engine);
+    ASSERT_EQ(rec["steps"].size(), 4u);
+    const char* names[] = {"deposit", "calibration", "relax", "engine input"};
+    double steps_cpu = 0.0;
+    for (std::size_t k = 0; k < 4; ++k) {
+      const nlohmann::json& s = rec["steps"][k];
+      EXPECT_EQ(s["step"], names[k]);
+      EXPECT_GE(s["cpu_seconds"].get<double>(), s["engine_cpu_seconds"].get<double>());
+      EXPECT_GT(s["wall_seconds"].get<double>(), 0.0);
+      steps_cpu += s["cpu_seconds"].get<double>();
+    }
+    EXPECT_GT(rec["steps"][1]["engine_cpu_seconds"].get<double>(), 0.0);  // the calibration ran the engine
+    EXPECT_GT(rec["steps"][2]["engine_cpu_seconds"].get<double>(), 0.0);
+    EXPECT_GE(rec["cpu_seconds"].get<double>(), 0.999 * steps_cpu);
+
+    // the target is the calibration pour's bulk packing fraction (its own poured packing, measured here), a
+    // random packing of disks, and the settled bed reaches it
+    const nlohmann::json& target = rec["chosen"]["target_phi"];
+    EXPECT_EQ(target["from"]["source"], "calibration pour");
+    const Packing cal = read_packing((out / "calibration" / "poured.csv").string());
+    const Scene cal_scene = scene_from_json(cal.meta["scene"], "poured.json");
+    EXPECT_EQ(cal_scene.container.kind, ContainerKind::Periodic);
+    EXPECT_EQ(static_cast<std::int64_t>(cal.grains.size()), target["from"]["grains"].get<std::int64_t>());
+    const double phi_cal = bulk_packing_fraction(cal.grains, cal_scene, 2.0);
+    EXPECT_DOUBLE_EQ(target["value"].get<double>(), phi_cal);
+    EXPECT_GT(phi_cal, 0.78);
+    EXPECT_LT(phi_cal, 0.88);
+    EXPECT_NEAR(bulk_packing_fraction(settled.grains, scene, 2.0), phi_cal, 0.01);
+    EXPECT_TRUE(rec["target_phi"]["reached"].get<bool>());
+
+    // the engine's ready-to-run input of the settled packing
+    EXPECT_TRUE(fs::exists(out / "dem_input" / (engine == "liggghts" ? "in.btr" : "relax_yade.py")));
+    EXPECT_EQ(settled.meta["command"], "settle");
+  }
+}
+
+TEST_F(SettleCli, RefusalsNameTheFileAndTheFieldAndWriteNothing) {
+  auto replaced = [](std::string text, const std::string& from, const std::string& to) {
+    return text.replace(text.find(from), from.size(), to);
+  };
+  const std::string point_source = "kind = \"point\"\nposition = [0.0]";
+  const std::string heap = replaced(replaced(kTinyBed, "kind = \"periodic\"\nsize = [0.03]", "kind = \"open\""),
+                                    "kind = \"rain\"", point_source);
+  const std::string heap_path = scene_file("heap", heap);
+  CliRun r = btr("settle " + heap_path + " -o " + (dir_ / "r1").string());
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find(heap_path), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("container.kind"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("btr pour"), std::string::npos) << r.err;  // says what to do instead
+  EXPECT_FALSE(fs::exists(dir_ / "r1" / "heap.csv"));
+
+  const std::string point_path = scene_file("point", replaced(kTinyBed, "kind = \"rain\"", point_source));
+  r = btr("settle " + point_path + " -o " + (dir_ / "r2").string());
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("source.kind"), std::string::npos) << r.err;
+
+  r = btr("settle " + scene_file("few", kTinyBed) + " -o " + (dir_ / "r3").string() + " --calibration-grains 10");
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("--calibration-grains"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "r3" / "settle.json"));
+}
+
+}  // namespace
+}  // namespace btr

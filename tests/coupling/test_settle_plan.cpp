@@ -1,0 +1,139 @@
+// `btr settle`'s plan (coupling/dem/settle_plan.h): the scenes it refuses, named by file and field; the
+// calibration cell's size and grain count against hand arithmetic; the relaxation settings it chooses.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "coupling/dem/relax_plan.h"
+#include "coupling/dem/settle_plan.h"
+
+namespace btr {
+namespace {
+
+Scene bed(int dimension) {
+  Scene s;
+  s.name = "bed";
+  s.file = "/scenes/bed.toml";
+  s.dimension = dimension;
+  s.grains.count = 1000;
+  Component c;
+  c.radius.kind = RadiusSpec::Kind::Constant;
+  c.radius.value = 1e-3;
+  s.grains.components = {c};
+  s.container.kind = ContainerKind::Periodic;
+  s.container.size_x = 0.03;
+  s.container.size_y = dimension == 3 ? 0.03 : 0.0;
+  s.source.kind = SourceSpec::Kind::Rain;
+  return s;
+}
+
+// The refusal's message, or "" when the scene is served.
+std::string refusal(const Scene& s) {
+  try {
+    check_settle_scene(s);
+    return "";
+  } catch (const RelaxRefused& e) {
+    return e.what();
+  }
+}
+
+TEST(SettlePlan, ServesBedsInPeriodicBoxAndCylinderContainers) {
+  for (ContainerKind k : {ContainerKind::Periodic, ContainerKind::Box, ContainerKind::Cylinder}) {
+    Scene s = bed(3);
+    s.container.kind = k;
+    s.container.radius = 0.015;
+    EXPECT_EQ(refusal(s), "");
+  }
+}
+
+TEST(SettlePlan, RefusesHeapsAndDynamicScenesNamingFileAndField) {
+  struct Case {
+    const char* field;
+    void (*make)(Scene&);
+  };
+  const Case cases[] = {
+      {"container.kind", [](Scene& s) { s.container.kind = ContainerKind::Open; }},
+      {"container.kind", [](Scene& s) { s.container.kind = ContainerKind::HeleShaw; }},
+      {"container.kind", [](Scene& s) { s.container.kind = ContainerKind::Drum; }},
+      {"source.kind", [](Scene& s) { s.source.kind = SourceSpec::Kind::Point; }},
+      {"source.kind", [](Scene& s) { s.source.kind = SourceSpec::Kind::Region; }},
+      {"[clusters]", [](Scene& s) { s.clusters = ClustersSpec{}; }},
+      {"[shaking]", [](Scene& s) { s.shaking = ShakingSpec{}; }},
+      {"[intruder]", [](Scene& s) { s.intruder = IntruderSpec{}; }},
+  };
+  for (const Case& c : cases) {
+    Scene s = bed(3);
+    c.make(s);
+    const std::string why = refusal(s);
+    SCOPED_TRACE(c.field);
+    EXPECT_EQ(why.rfind("/scenes/bed.toml: ", 0), 0u) << why;
+    EXPECT_NE(why.find(c.field), std::string::npos) << why;
+  }
+}
+
+TEST(SettlePlan, CalibrationCellIsFiveLargestDiametersWideAndTenDeepIn3d) {
+  Scene s = bed(3);
+  s.seed = 7;
+  s.relax.target_phi = 0.7;  // a scene's own target is not the calibration's
+  const CalibrationPlan p = calibration_plan(s);
+  const double d = 2e-3, v = 4.0 / 3.0 * M_PI * 1e-9;
+  EXPECT_DOUBLE_EQ(p.largest_diameter, d);
+  EXPECT_DOUBLE_EQ(p.width, 5 * d);
+  EXPECT_NEAR(p.mean_grain_volume, v, 1e-24);
+  // 0.6 (5 d)^2 (10 d) / (pi d^3 / 6) = 150 / (pi / 6) = 286.48..., rounded up
+  EXPECT_EQ(p.grains, 287);
+  EXPECT_EQ(p.scene.grains.count, 287);
+  EXPECT_EQ(p.scene.container.kind, ContainerKind::Periodic);
+  EXPECT_DOUBLE_EQ(p.scene.container.size_x, 5 * d);
+  EXPECT_DOUBLE_EQ(p.scene.container.size_y, 5 * d);
+  EXPECT_EQ(p.scene.source.kind, SourceSpec::Kind::Rain);
+  EXPECT_FALSE(p.scene.relax.target_phi.has_value());
+  EXPECT_EQ(p.scene.seed, 7u);
+}
+
+TEST(SettlePlan, CalibrationOfA2dMixtureCountsEachComponentsArea) {
+  Scene s = bed(2);
+  Component big = s.grains.components[0];
+  big.species = 2;
+  big.radius.value = 2e-3;
+  s.grains.components[0].fraction = 0.75;
+  big.fraction = 0.25;
+  s.grains.components.push_back(big);
+  const CalibrationPlan p = calibration_plan(s);
+  const double d = 4e-3, area = 0.75 * M_PI * 1e-6 + 0.25 * M_PI * 4e-6;  // number-weighted mean disk area
+  EXPECT_DOUBLE_EQ(p.width, 20 * d);
+  EXPECT_NEAR(p.mean_grain_volume, area, 1e-18);
+  EXPECT_EQ(p.grains, static_cast<std::int64_t>(std::ceil(0.8 * (20 * d) * (10 * d) / area)));  // 466
+  EXPECT_EQ(p.scene.container.size_y, 0.0);
+}
+
+TEST(SettlePlan, CalibrationGrainsCanBeGivenButNotTooFew) {
+  EXPECT_EQ(calibration_plan(bed(3), 120).grains, 120);
+  try {
+    calibration_plan(bed(3), 10);
+    FAIL() << "10 calibration grains accepted";
+  } catch (const RelaxRefused& e) {
+    EXPECT_NE(std::string(e.what()).find("--calibration-grains"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SettlePlan, ChoicesRecordTheTargetAndWhereEachValueCameFrom) {
+  Scene s = bed(3);
+  s.relax.compaction_damping = 0.2;
+  const SettleChoices c = settle_choices(s, 0.63, {{"source", "calibration pour"}});
+  EXPECT_EQ(c.settings.target_phi, 0.63);
+  EXPECT_EQ(c.settings.compaction_damping, 0.2);
+  EXPECT_EQ(c.settings.damping, 0.5);
+  EXPECT_EQ(c.settings.target_margin, kCalibrationMargin);
+  EXPECT_EQ(c.stop_rule, "unbalanced-force");
+  for (const char* key : {"target_phi", "compaction_damping", "damping", "stop_rule", "target_margin"}) {
+    ASSERT_TRUE(c.record.contains(key)) << key;
+    EXPECT_TRUE(c.record[key].contains("from")) << key;
+  }
+  EXPECT_EQ(c.record["target_phi"]["from"]["source"], "calibration pour");
+  s.relax.engine = "yade";
+  EXPECT_EQ(settle_choices(s, 0.63, {}).settings.compaction_damping, 0.5);
+}
+
+}  // namespace
+}  // namespace btr
