@@ -187,6 +187,8 @@ def main(argv=None) -> int:
     sm.add_argument("--margin", type=float, help=margin_help)
     sm.add_argument("--reuse-pours", action="store_true",
                     help="reuse the reference pours already finished in OUT/runs with the same scene and settings")
+    sm.add_argument("--reuse-settles", action="store_true",
+                    help="reuse a btr settle already finished in OUT/runs/ROW/settle from the same scene and engine")
     sm.add_argument("--pours-only", action="store_true", help="the reference pours alone (no btr settle)")
 
     args = ap.parse_args(argv)
@@ -308,7 +310,8 @@ def main(argv=None) -> int:
             except ValueError as e:
                 raise InputError(f"--rows: {e}") from None
             run_settle_matrix(args.out, args.count, args.depth, args.heap_count, args.yade_count, args.engine,
-                              args.ref_seeds, args.np, args.margin, args.reuse_pours, args.pours_only, only, progress)
+                              args.ref_seeds, args.np, args.margin, args.reuse_pours, args.pours_only, only, progress,
+                              reuse_settles=args.reuse_settles)
     except Interrupted as e:
         print(f"btr_workflow.py {args.command}: {e}: the program it ran was stopped; run.json and the tables "
               "record the interrupted case", file=sys.stderr)

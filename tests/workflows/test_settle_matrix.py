@@ -78,14 +78,17 @@ def test_judge_and_cost_ratio_by_hand():
     assert settle_report.cost_ratio(None, [50.0]) is None
 
 
-def fake_settle_command(btr, record):
+def fake_settle_command(btr, record, calls=None):
     """run_command for `btr settle`: a heap scene is refused (exit 2, reason on stderr); a bed gets a BTR deposit of
-    seed 9 as its settled packing OUTDIR/NAME.csv and settle.json = record. Other commands run for real."""
+    seed 9 as its settled packing OUTDIR/NAME.csv and settle.json = record (with the scene's name). Other commands
+    run for real. calls, a list, gets each settled scene's name."""
     real = btr_cli.run_command
 
     def run(argv, cwd, label, **kw):
         if argv[1] != "settle":
             return real(argv, cwd, label, **kw)
+        if calls is not None:
+            calls.append(Path(argv[2]).stem)
         scene = argv[2]
         err = Path(cwd) / f"{label}.stderr"
         out = Path(cwd) / f"{label}.stdout"
@@ -95,7 +98,7 @@ def fake_settle_command(btr, record):
             err.write_text(f"{scene}: btr settle: a point source on an open floor (a heap) is refused for now\n")
             return {"returncode": 2, "wall_seconds": 0.01, "cpu_seconds": 0.01, "stdout": str(out), "stderr": str(err)}
         btr_cli.deposit(btr, scene, cwd, name, seed=9, progress=lambda m: None)
-        (Path(cwd) / "settle.json").write_text(json.dumps(record))
+        (Path(cwd) / "settle.json").write_text(json.dumps(dict(record, scene_name=name, engine="liggghts", seed=1)))
         err.write_text("")
         return {"returncode": 0, "wall_seconds": 0.5, "cpu_seconds": 0.4, "stdout": str(out), "stderr": str(err)}
     return run
@@ -106,8 +109,8 @@ def test_refused_heap_is_a_failed_row_and_the_bed_is_judged(tmp_path, btr_binary
     record = {"cpu_seconds": 3.0, "wall_seconds": 4.0, "steps": [{"step": "deposit", "cpu_seconds": 0.1,
                                                                    "wall_seconds": 0.1}],
               "chosen": {"target_phi": {"value": 0.6, "from": "calibration"}}}
-    monkeypatch.setattr(btr_cli, "run_command", fake_settle_command(btr_binary, record))
-    monkeypatch.setattr(btr_cli, "has_command", lambda btr, name: True)
+    settle_calls = []
+    monkeypatch.setattr(btr_cli, "run_command", fake_settle_command(btr_binary, record, settle_calls))
     poured = []
 
     def fake_pour(scene, folder, seed, engine, ranks, reuse, progress):
@@ -124,7 +127,7 @@ def test_refused_heap_is_a_failed_row_and_the_bed_is_judged(tmp_path, btr_binary
     bed, failed, heap = res["rows"]  # in the matrix's order: bed_mu0.5, bed_mu0.1, then heaps
     assert failed["row"] == "bed_mu0.1" and failed["status"] == "fail" and "status 5" in failed["reason"]
     assert heap["row"] == "heap_open_floor" and heap["status"] == "fail"
-    assert "refused the scene (exit 2)" in heap["reason"] and "open floor (a heap) is refused" in heap["reason"]
+    assert "btr settle exited with status 2" in heap["reason"] and "open floor (a heap) is refused" in heap["reason"]
     assert ("heap_open_floor", 1) not in poured and [s for n, s in poured if n == "bed_mu0.5"] == [1, 2, 3]
     assert bed["status"] == "ok", bed["reason"]
     # the error / floor of packing fraction and coordination, from the packings' own measures
@@ -138,16 +141,23 @@ def test_refused_heap_is_a_failed_row_and_the_bed_is_judged(tmp_path, btr_binary
     assert bed["settle"]["cost_ratio"] == pytest.approx(3.0 / 20.0)  # settle.json's 3 s over the pours' mean 20 s
     assert bed["settle"]["target_phi"] == {"value": 0.6, "from": "calibration"}
     report = (out / "report.md").read_text()
-    assert "| heap_open_floor |" in report and "refused the scene" in report and "| bed_mu0.1 |" in report
+    assert "| heap_open_floor |" in report and "status 2" in report and "| bed_mu0.1 |" in report
     assert (out / "settle_matrix.png").stat().st_size > 0
     assert json.loads((out / "run.json").read_text())["status"] == "ok"
+    # again with reuse: bed_mu0.5's finished settle is taken as it is (no new run), the refused heap runs again
+    assert settle_calls == ["bed_mu0.5", "heap_open_floor"]
+    again = settle_matrix.run_settle_matrix(out, count=400, depth=0.006, heap_count=50, margin=1.0,
+                                            only=["heap_open_floor", "bed_mu0.5"], progress=lambda m: None,
+                                            reuse_settles=True)
+    assert settle_calls == ["bed_mu0.5", "heap_open_floor", "heap_open_floor"]
+    assert again["rows"][0]["settle"]["reused"] is True
+    assert again["rows"][0]["settle"]["judged"] == bed["settle"]["judged"]
 
 
 def test_settle_method_in_error_vs_runtime(tmp_path, btr_binary, monkeypatch):
     monkeypatch.setenv("BTR_BINARY", btr_binary)
     record = {"cpu_seconds": 2.5, "wall_seconds": 3.5, "steps": [], "chosen": {"target_phi": {"value": 0.6}}}
     monkeypatch.setattr(btr_cli, "run_command", fake_settle_command(btr_binary, record))
-    monkeypatch.setattr(btr_cli, "has_command", lambda btr, name: True)
 
     def fake_pour(packing, outdir, settings, progress):  # reference "pours": deposits of other seeds
         dep = btr_cli.deposit(btr_binary, scene, outdir, "poured", seed=10 + settings.seed, count=150, progress=progress)
@@ -159,7 +169,7 @@ def test_settle_method_in_error_vs_runtime(tmp_path, btr_binary, monkeypatch):
                                              margin=1.0, methods=("settle",), progress=lambda m: None)
     row = next(r for r in res["rows"] if r["kind"] == "settle")
     assert row["method"] == "btr settle (liggghts)" and row["status"] == "ok", row["reason"]
-    assert row["cost_seconds"] == 2.5 and row["cpu_seconds_from"] == "settle.json"
+    assert row["cost_seconds"] == 2.5  # settle.json's cpu_seconds
     want = abs(measures.packing_fraction(measures.measure(row["path"], 1.0)) -
                res["reference"]["mean"]["packing_fraction"])
     assert row["errors"]["packing_fraction"] == pytest.approx(want, rel=1e-12)

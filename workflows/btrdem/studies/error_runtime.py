@@ -293,14 +293,11 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
 
 def settle_row(row, btr, scene_path, folder, engine, count, ranks, margin, mean, names, progress):
     """`btr settle` of the study's scene (its seed, the study's count and engine) into folder; its cost is
-    settle.json's cpu_seconds (calibration pour included), else the processor time measured here."""
-    res = btr_cli.settle(btr, scene_path, folder, engine, count=count, np=ranks, progress=progress)
-    btr_cli.require_settled(res)
-    record = res["record"] or {}
+    settle.json's cpu_seconds (calibration pour included)."""
+    res = btr_cli.settle(btr, scene_path, engine, folder, np=ranks, count=count, progress=progress)
+    record = res["record"]
     row["values"] = m = measures_of(res["csv"], margin)
-    row.update(wall_seconds=record.get("wall_seconds", res["wall_seconds"]),
-               cpu_seconds=record.get("cpu_seconds", res["cpu_seconds"]),
-               cpu_seconds_from="settle.json" if "cpu_seconds" in record else "measured here",
+    row.update(wall_seconds=record.get("wall_seconds", res["wall_seconds"]), cpu_seconds=res["cpu_seconds"],
                errors=errors_of(m, mean, names), path=res["csv"], target_reached=res["target_reached"],
                chosen=record.get("chosen"), settle_steps=record.get("steps"))
 

@@ -14,6 +14,7 @@ settle_matrix.json, settle_matrix.png and run.json are rewritten after every row
 the row scenes to OUT/scenes/."""
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 from ..core import btr_cli
@@ -29,7 +30,7 @@ from .settle_rows import (BED_BASE, DEFAULT_COUNT, DEFAULT_DEPTH, DEFAULT_HEAP_C
 def run_settle_matrix(outdir, count: int = DEFAULT_COUNT, depth: float = DEFAULT_DEPTH,
                       heap_count: int = DEFAULT_HEAP_COUNT, yade_count: int = 0, engine: str = "liggghts",
                       ref_seeds: int = 3, ranks: int = 1, margin: float | None = None, reuse_pours: bool = False,
-                      pours_only: bool = False, only=None, progress=print) -> dict:
+                      pours_only: bool = False, only=None, progress=print, reuse_settles: bool = False) -> dict:
     if ref_seeds < 3:
         raise StepFailed(f"settle-matrix: --ref-seeds: expected at least 3 (the seed-to-seed spread is the floor), "
                          f"got {ref_seeds}")
@@ -38,7 +39,7 @@ def run_settle_matrix(outdir, count: int = DEFAULT_COUNT, depth: float = DEFAULT
     specs = matrix_rows(count, heap_count, yade_count, only)
     settings = {"count": count, "depth": depth, "heap_count": heap_count, "yade_count": yade_count, "engine": engine,
                 "ref_seeds": ref_seeds, "np": ranks, "margin": margin, "reuse_pours": reuse_pours,
-                "pours_only": pours_only, "rows": [s["name"] for s in specs]}
+                "reuse_settles": reuse_settles, "pours_only": pours_only, "rows": [s["name"] for s in specs]}
     rec = RunRecord(outdir, "settle-matrix", inputs=[BED_BASE, *HEAP_BASES.values()], btr=btr, progress=progress,
                     settings=settings)
     command = " ".join(["/usr/bin/python3"] + [str(a) for a in rec.data["command"][1:]])
@@ -66,7 +67,7 @@ def run_settle_matrix(outdir, count: int = DEFAULT_COUNT, depth: float = DEFAULT
                 if pours_only:
                     row.update(status="skipped", reason="a heap row runs settle first; --pours-only runs no settle")
                     continue
-                settled = settle_run(btr, scene, folder / "settle", eng, ranks, progress)  # refused: the row fails here
+                settled = settle_run(btr, scene, folder / "settle", eng, ranks, reuse_settles, progress)  # refused: fails
             refs, runs = [], []
             for seed in range(1, ref_seeds + 1):
                 s = reference_pour(scene, folder / f"pour_seed{seed}", seed, eng, ranks, reuse_pours, progress)
@@ -89,7 +90,7 @@ def run_settle_matrix(outdir, count: int = DEFAULT_COUNT, depth: float = DEFAULT
                 row["settle"] = {"note": "settle not run (--pours-only)"}
                 continue
             if settled is None:
-                settled = settle_run(btr, scene, folder / "settle", eng, ranks, progress)
+                settled = settle_run(btr, scene, folder / "settle", eng, ranks, reuse_settles, progress)
             row["settle"] = judged_settle(settled, row["reference"], margin, ref_seeds)
     rec.finish({"rows": len(rows), "ok": sum(r["status"] == "ok" for r in rows)})
     return write(rows)
@@ -106,26 +107,47 @@ def reference_pour(scene: str, folder: Path, seed: int, engine: str, ranks: int,
     return dict(s, record_cpu_seconds=read_json(folder / "pour.json").get("cpu_seconds"))
 
 
-def settle_run(btr: str, scene: str, folder: Path, engine: str, ranks: int, progress) -> dict:
-    """`btr settle SCENE --seed 1`; StepFailed with btr's reason unless it wrote its packing."""
-    res = btr_cli.settle(btr, scene, folder, engine, seed=1, np=ranks, progress=progress)
-    btr_cli.require_settled(res)
+def settle_run(btr: str, scene: str, folder: Path, engine: str, ranks: int, reuse: bool, progress) -> dict:
+    """`btr settle SCENE --seed 1` (btr_cli.settle); StepFailed with btr's reason (exit 2: a refused scene) unless it
+    wrote its packing. With reuse, a settle that finished in folder from the same scene text (kept beside it as
+    settled_scene.toml) with the same engine is taken as it is, with its recorded times."""
+    stamp = folder / "settled_scene.toml"
+    done = finished_settle(scene, folder, engine) if reuse else None
+    if done is not None:
+        progress(f"  [settle] reused the finished settle in {folder} ({done['cpu_seconds']:.1f} s CPU)")
+        return done
+    stamp.unlink(missing_ok=True)
+    res = btr_cli.settle(btr, scene, engine, folder, np=ranks, seed=1, progress=progress)
+    shutil.copyfile(scene, stamp)
     return res
+
+
+def finished_settle(scene: str, folder: Path, engine: str) -> dict | None:
+    stamp, record_path = folder / "settled_scene.toml", folder / "settle.json"
+    if not (stamp.exists() and record_path.exists()) or stamp.read_text() != Path(scene).read_text():
+        return None
+    record = read_json(record_path)
+    csv = folder / f"{record.get('scene_name')}.csv"
+    if record.get("engine") != engine or record.get("seed") != 1 or not csv.exists():
+        return None
+    return {"target_reached": (record.get("target_phi") or {}).get("reached", True) is not False,
+            "wall_seconds": record.get("wall_seconds"), "cpu_seconds": record.get("cpu_seconds"), "csv": str(csv),
+            "record": record, "reused": True}
 
 
 def judged_settle(res: dict, ref: dict, margin, ref_seeds: int) -> dict:
     """The settled packing's values, errors against the pours' mean, error / floor, and cost ratio."""
     names = ref["measures"]
     values = measures_of(res["csv"], margin)
-    record = res["record"] or {}
+    record = res["record"]
     cpu = record.get("cpu_seconds")
     judged = settle_report.judge(errors_of(values, ref["mean"], names), ref["floor"], ref_seeds)
-    out = {"exit_status": res["exit_status"], "target_reached": res["target_reached"], "csv": res["csv"],
+    out = {"target_reached": res["target_reached"], "csv": res["csv"],
            "values": {k: values[k] for k in names if k != "rdf"}, "judged": judged,
            "all_within": all(j["within"] for j in judged.values()),
-           "cpu_seconds": cpu, "cpu_seconds_from": "settle.json" if cpu is not None else None,
+           "cpu_seconds": cpu, "reused": bool(res.get("reused")),
            "wall_seconds": record.get("wall_seconds", res["wall_seconds"]),
-           "measured_cpu_seconds": res["cpu_seconds"],
+           "measured_cpu_seconds": res.get("run_cpu_seconds"),
            "cost_ratio": settle_report.cost_ratio(cpu, ref["cpu_seconds"]),
            "target_phi": (record.get("chosen") or {}).get("target_phi"), "chosen": record.get("chosen"),
            "target_phi_reached": record.get("target_phi"),
