@@ -15,6 +15,7 @@
 #include "coupling/engines.h"
 #include "coupling/io/atomic_file.h"
 #include "coupling/io/scene_json.h"
+#include "engine_command.h"
 #include "load_packing.h"
 #include "measures_json.h"
 #include "packing_meta.h"
@@ -149,20 +150,8 @@ Runner add_pour_command(CLI::App& app) {
   cmd->add_option("--time-limit", o->settings.wall_time_limit, "wall-time limit of the engine run [s]")
       ->capture_default_str()
       ->check(positive_number());
-  return [o, cmd]() -> int {
-    try {
-      return run(*o, *cmd);
-    } catch (const btr::Interrupted& e) {
-      std::cerr << "btr pour: " << e.what() << "\n";
-      return interrupted_exit_code(e.signal());
-    } catch (const btr::EngineFailure& e) {
-      std::cerr << "btr pour: " << e.what() << "\n";
-      return kEngineFailed;
-    } catch (const std::exception& e) {
-      std::cerr << "btr pour: " << e.what() << "\n";
-      return kBadInput;
-    }
-  };
+  // Anything else is a file it could not read or a value it refuses: bad input.
+  return [o, cmd]() -> int { return run_engine_command("pour", kBadInput, [&] { return run(*o, *cmd); }); };
 }
 
 }  // namespace btr_app

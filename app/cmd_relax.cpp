@@ -12,6 +12,7 @@
 #include "coupling/dem/relax.h"
 #include "coupling/io/atomic_file.h"
 #include "coupling/engines.h"
+#include "engine_command.h"
 #include "load_packing.h"
 #include "measures_json.h"
 #include "validators.h"
@@ -142,8 +143,9 @@ Runner add_relax_command(CLI::App& app) {
                     ", the contact law's static overlap of a grain on the floor alone and under its column, "
                     "and run no engine");
 
+  // Anything else is a file it could not read or a value it refuses: bad input.
   return [o, cmd]() -> int {
-    try {
+    return run_engine_command("relax", kBadInput, [&]() -> int {
       PackingWithScene p = load_packing_with_scene(o->packing);
       if (o->predict_overlap) return predict_overlap(p, o->out);
       if (cmd->count("--timestep")) o->settings.timestep = o->timestep;
@@ -168,8 +170,7 @@ Runner add_relax_command(CLI::App& app) {
                 << r.final_unbalanced_force << "; " << r.contacts.size() << " contacts\n";
       if (p.scene.container.kind == btr::ContainerKind::Open)
         std::cout << "open floor: " << r.removed.size() << " grain(s) left the region and were removed\n";
-      std::cout
-                << "wrote " << o->out << "/relaxed.csv (.json, .vtp), kinetic.csv, contacts.csv, velocities.csv\n";
+      std::cout << "wrote " << o->out << "/relaxed.csv (.json, .vtp), kinetic.csv, contacts.csv, velocities.csv\n";
       const nlohmann::json& target = r.relaxed.meta.contains("target_phi") ? r.relaxed.meta["target_phi"]
                                                                             : nlohmann::json();
       if (target.is_object() && target.value("reached", true) == false) {
@@ -178,16 +179,7 @@ Runner add_relax_command(CLI::App& app) {
         return kTargetNotReached;
       }
       return kSuccess;
-    } catch (const btr::Interrupted& e) {
-      std::cerr << "btr relax: " << e.what() << "\n";
-      return interrupted_exit_code(e.signal());
-    } catch (const btr::EngineFailure& e) {
-      std::cerr << "btr relax: " << e.what() << "\n";
-      return kEngineFailed;
-    } catch (const std::exception& e) {
-      std::cerr << "btr relax: " << e.what() << "\n";
-      return kBadInput;
-    }
+    });
   };
 }
 

@@ -18,6 +18,7 @@
 #include "coupling/dem/settle_plan.h"
 #include "coupling/engines.h"
 #include "coupling/io/atomic_file.h"
+#include "engine_command.h"
 #include "measures_json.h"
 #include "packing_meta.h"
 #include "progress.h"
@@ -155,7 +156,8 @@ int run(const Options& o, const CLI::App& cmd) {
 
   // ---- 3. the relaxation of the BTR packing to the target
   say("3/3 " + engine + " relaxation of the BTR packing to the target");
-  const btr::SettleChoices choices = btr::settle_choices(scene, target, target_from);
+  const btr::SettleChoices choices = btr::settle_choices(
+      scene, target, target_from, btr::bed_depth_in_largest_diameters(btr_packing.grains, scene, target));
   btr::Scene relax_scene = scene;
   relax_scene.relax.stop_rule = choices.stop_rule;
   btr::RelaxSettings settings = choices.settings;
@@ -251,26 +253,7 @@ Runner add_settle_command(CLI::App& app) {
       ->capture_default_str()
       ->check(positive_number());
   cmd->add_flag("--quiet", o->quiet, "no progress bar");
-  return [o, cmd]() -> int {
-    try {
-      return run(*o, *cmd);
-    } catch (const btr::Interrupted& e) {
-      std::cerr << "btr settle: " << e.what() << "\n";
-      return interrupted_exit_code(e.signal());
-    } catch (const btr::EngineFailure& e) {
-      std::cerr << "btr settle: " << e.what() << "\n";
-      return kEngineFailed;
-    } catch (const btr::SceneError& e) {
-      std::cerr << "btr settle: " << e.what() << "\n";
-      return kBadInput;
-    } catch (const btr::RelaxRefused& e) {
-      std::cerr << "btr settle: " << e.what() << "\n";
-      return kBadInput;
-    } catch (const std::exception& e) {
-      std::cerr << "btr settle: " << e.what() << "\n";
-      return kInternalFailure;
-    }
-  };
+  return [o, cmd]() -> int { return run_engine_command("settle", kInternalFailure, [&] { return run(*o, *cmd); }); };
 }
 
 }  // namespace btr_app

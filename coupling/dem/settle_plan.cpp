@@ -1,5 +1,6 @@
 #include "coupling/dem/settle_plan.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "btr/model/number_text.h"
@@ -79,23 +80,47 @@ CalibrationPlan calibration_plan(const Scene& scene, std::int64_t grains) {
   return plan;
 }
 
-SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohmann::json& target_from) {
+double bed_depth_in_largest_diameters(const Grains& grains, const Scene& scene, double packing_fraction) {
+  const int dim = scene.dimension;
+  double solid = 0.0, r_max = 0.0;
+  for (const Grain& g : grains) {
+    solid += dim == 3 ? 4.0 / 3.0 * M_PI * g.r * g.r * g.r : M_PI * g.r * g.r;
+    r_max = std::max(r_max, g.r);
+  }
+  const Container& c = scene.container;
+  const double floor = c.kind == ContainerKind::Cylinder ? (dim == 3 ? M_PI * c.radius * c.radius : 2.0 * c.radius)
+                       : dim == 3                        ? c.size_x * c.size_y
+                                                         : c.size_x;
+  return solid / (floor * packing_fraction) / (2.0 * r_max);
+}
+
+SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohmann::json& target_from,
+                             double depth) {
   SettleChoices c;
   c.settings.target_phi = target_phi;
   c.settings.damping = c.damping;
   c.settings.target_margin = kCalibrationMargin;  // the target is measured in the same window as the calibration
-  // YADE's local damping lets the bed collapse faster than LIGGGHTS' viscous damping of the same value
-  // (docs/guide/relax.md, "Target packing fraction"): each engine keeps the compaction damping measured for it.
+  c.settings.compaction_timestep_fraction = kSettleCompactionTimestepFraction;
   const bool yade = scene.relax.engine == "yade";
-  const double compaction_damping = yade ? 0.5 : scene.relax.compaction_damping;
+  const double by_depth =
+      kCompactionDampingAtAnchor * std::pow(depth / kDampingAnchorDepth, kCompactionDampingExponent);
+  const double compaction_damping = yade ? kYadeCompactionDamping : std::clamp(by_depth, 0.05, 0.3);
   c.settings.compaction_damping = compaction_damping;
+  const bool measured_range = depth >= 0.99 * kDampingAnchorDepth && depth <= 3.01 * kDampingAnchorDepth;
+  const std::string depth_text = g6(depth) + " largest diameters";
   c.record = {
       {"target_phi", {{"value", target_phi}, {"from", target_from}}},
       {"compaction_damping",
        {{"value", compaction_damping},
-        {"from", yade ? "btr settle's YADE compaction damping (its local damping collapses a bed faster than "
-                        "LIGGGHTS' viscous damping of the same value; docs/guide/relax.md)"
-                      : "the scene's relax.compaction_damping (btr's default 0.15 unless the scene sets it)"}}},
+        {"bed_depth_largest_diameters", depth},
+        {"from", yade ? "btr settle's YADE compaction damping, measured on bed3d at 14.1 largest diameters deep "
+                        "(this bed: " + depth_text + ")"
+                      : "btr settle's rule 0.15 (depth / 14.1 largest diameters)^-0.369, held within [0.05, 0.3], "
+                        "measured on bed3d at 14.1 and 42.3 largest diameters deep (this bed: " + depth_text +
+                            (measured_range ? ")" : ", outside that range: extrapolated)")}}},
+      {"compaction_timestep_fraction",
+       {{"value", kSettleCompactionTimestepFraction},
+        {"from", "btr settle: twice the settle's fraction, measured on bed3d to give the same structure"}}},
       {"target_margin",
        {{"value", kCalibrationMargin},
         {"from", "the calibration's bulk window: largest diameters from the floor, walls and surface"}}},

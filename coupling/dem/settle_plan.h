@@ -48,15 +48,38 @@ struct CalibrationPlan {
 // stop ratio, max time) and material as the scene.
 CalibrationPlan calibration_plan(const Scene& scene, std::int64_t grains = 0);
 
-// What settle hands the relaxation: the target, the friction-reduction compaction at the scene's compaction
-// damping, the quasi-static settle (damping 0.5) on the unbalanced-force rule. `record` (settle.json "chosen")
-// says where each value came from.
+// The compaction damping that lands a LIGGGHTS bed's coordination on its pours' falls with the bed's depth: a deeper
+// bed's collapse lasts longer and closes more contacts at a given damping. Measured on bed3d (coupling/README.md,
+// "The calibration depends on the bed's depth"): 0.15 lands at 3 cm, 0.1 at 9 cm, which bed_depth_in_largest_diameters
+// puts at 14.1 and 42.3 largest diameters; the power law through those two points,
+// D = 0.15 (depth / 14.1 d_max)^-0.369, is settle's rule, held within [0.05, 0.3] (outside the depths it was
+// measured between it is an extrapolation, and settle.json says so).
+inline constexpr double kDampingAnchorDepth = 14.1;  // largest diameters: bed3d, 10 000 grains in 3 cm x 3 cm
+inline constexpr double kCompactionDampingAtAnchor = 0.15;
+inline constexpr double kCompactionDampingExponent = -0.369;  // ln(0.1 / 0.15) / ln(3), the depths' ratio
+// YADE's local damping brakes a collapse less than LIGGGHTS' viscous damping of the same value: 0.5 landed on
+// bed3d at 3 cm (docs/guide/relax.md); no depth rule has been measured for it.
+inline constexpr double kYadeCompactionDamping = 0.5;
+// The compaction's step as a fraction of the Rayleigh / contact time: twice the settle's 0.2, the setting
+// measured to give the same structure for 0.65x the processor time (coupling/README.md, "The compaction's time
+// step"); the settle after it keeps the scene's own step.
+inline constexpr double kSettleCompactionTimestepFraction = 0.4;
+
+// The bed's depth in largest diameters: its grains' solid volume over the container's floor area (2D: width),
+// at the packing fraction the calibration measured.
+double bed_depth_in_largest_diameters(const Grains& grains, const Scene& scene, double packing_fraction);
+
+// What settle hands the relaxation: the target, the friction-reduction compaction with the damping of the rule
+// above for the bed's depth (LIGGGHTS; YADE: 0.5) and a step of 0.4 of the characteristic time, then the
+// quasi-static settle (damping 0.5) on the unbalanced-force rule. `record` (settle.json "chosen") says where each
+// value came from.
 struct SettleChoices {
   RelaxSettings settings;
   std::string stop_rule = "unbalanced-force";
   double damping = 0.5;
   nlohmann::json record;
 };
-SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohmann::json& target_from);
+SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohmann::json& target_from,
+                             double depth_in_largest_diameters);
 
 }  // namespace btr

@@ -117,22 +117,45 @@ TEST(SettlePlan, CalibrationGrainsCanBeGivenButNotTooFew) {
   }
 }
 
+TEST(SettlePlan, BedDepthIsTheSolidVolumeOverTheFloorAtThePackingFraction) {
+  Scene s = bed(3);  // 3 cm x 3 cm floor
+  Grains g(1000);
+  for (Grain& x : g) x.r = 1e-3;
+  // 1000 (4/3 pi mm^3) / (900 mm^2 0.5) = 9.308 mm, in 2 mm diameters
+  EXPECT_NEAR(bed_depth_in_largest_diameters(g, s, 0.5), 4000.0 / 3.0 * M_PI / 450.0 / 2.0, 1e-9);
+  s.container.kind = ContainerKind::Cylinder;
+  s.container.radius = 0.01;
+  EXPECT_NEAR(bed_depth_in_largest_diameters(g, s, 0.5), 4000.0 / 3.0 * M_PI / (M_PI * 100.0 * 0.5) / 2.0, 1e-9);
+}
+
+TEST(SettlePlan, CompactionDampingFollowsTheDepthRuleThroughItsTwoMeasuredPoints) {
+  const Scene s = bed(3);
+  EXPECT_NEAR(*settle_choices(s, 0.63, {}, 14.1).settings.compaction_damping, 0.15, 1e-12);
+  EXPECT_NEAR(*settle_choices(s, 0.63, {}, 42.3).settings.compaction_damping, 0.1, 1e-3);
+  EXPECT_EQ(*settle_choices(s, 0.63, {}, 1e4).settings.compaction_damping, 0.05);  // held, not extrapolated further
+  EXPECT_EQ(*settle_choices(s, 0.63, {}, 0.1).settings.compaction_damping, 0.3);
+  const std::string from = settle_choices(s, 0.63, {}, 100.0).record["compaction_damping"]["from"];
+  EXPECT_NE(from.find("extrapolated"), std::string::npos) << from;
+  const std::string inside = settle_choices(s, 0.63, {}, 20.0).record["compaction_damping"]["from"];
+  EXPECT_EQ(inside.find("extrapolated"), std::string::npos) << inside;
+}
+
 TEST(SettlePlan, ChoicesRecordTheTargetAndWhereEachValueCameFrom) {
   Scene s = bed(3);
-  s.relax.compaction_damping = 0.2;
-  const SettleChoices c = settle_choices(s, 0.63, {{"source", "calibration pour"}});
+  const SettleChoices c = settle_choices(s, 0.63, {{"source", "calibration pour"}}, 15.0);
   EXPECT_EQ(c.settings.target_phi, 0.63);
-  EXPECT_EQ(c.settings.compaction_damping, 0.2);
+  EXPECT_EQ(c.settings.compaction_timestep_fraction, 0.4);
   EXPECT_EQ(c.settings.damping, 0.5);
   EXPECT_EQ(c.settings.target_margin, kCalibrationMargin);
   EXPECT_EQ(c.stop_rule, "unbalanced-force");
-  for (const char* key : {"target_phi", "compaction_damping", "damping", "stop_rule", "target_margin"}) {
+  for (const char* key : {"target_phi", "compaction_damping", "damping", "stop_rule", "target_margin",
+                          "compaction_timestep_fraction"}) {
     ASSERT_TRUE(c.record.contains(key)) << key;
     EXPECT_TRUE(c.record[key].contains("from")) << key;
   }
   EXPECT_EQ(c.record["target_phi"]["from"]["source"], "calibration pour");
   s.relax.engine = "yade";
-  EXPECT_EQ(settle_choices(s, 0.63, {}).settings.compaction_damping, 0.5);
+  EXPECT_EQ(settle_choices(s, 0.63, {}, 15.0).settings.compaction_damping, 0.5);
 }
 
 }  // namespace
