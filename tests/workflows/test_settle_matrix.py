@@ -152,6 +152,14 @@ def test_refused_heap_is_a_failed_row_and_the_bed_is_judged(tmp_path, btr_binary
     assert settle_calls == ["bed_mu0.5", "heap_open_floor", "heap_open_floor"]
     assert again["rows"][0]["settle"]["reused"] is True
     assert again["rows"][0]["settle"]["judged"] == bed["settle"]["judged"]
+    # another btr program (one more byte: another SHA-256) settles again
+    other = tmp_path / "btr_other"
+    other.write_bytes(Path(btr_binary).read_bytes() + b"\0")
+    other.chmod(0o755)
+    monkeypatch.setenv("BTR_BINARY", str(other))
+    settle_matrix.run_settle_matrix(out, count=400, depth=0.006, margin=1.0, only=["bed_mu0.5"],
+                                    progress=lambda m: None, reuse_settles=True)
+    assert settle_calls == ["bed_mu0.5", "heap_open_floor", "heap_open_floor", "bed_mu0.5"]
 
 
 def test_settle_method_in_error_vs_runtime(tmp_path, btr_binary, monkeypatch):

@@ -14,7 +14,7 @@ settle_matrix.json, settle_matrix.png and run.json are rewritten after every row
 the row scenes to OUT/scenes/."""
 from __future__ import annotations
 
-import shutil
+import hashlib
 from pathlib import Path
 
 from ..core import btr_cli
@@ -109,22 +109,27 @@ def reference_pour(scene: str, folder: Path, seed: int, engine: str, ranks: int,
 
 def settle_run(btr: str, scene: str, folder: Path, engine: str, ranks: int, reuse: bool, progress) -> dict:
     """`btr settle SCENE --seed 1` (btr_cli.settle); StepFailed with btr's reason (exit 2: a refused scene) unless it
-    wrote its packing. With reuse, a settle that finished in folder from the same scene text (kept beside it as
-    settled_scene.toml) with the same engine is taken as it is, with its recorded times."""
-    stamp = folder / "settled_scene.toml"
-    done = finished_settle(scene, folder, engine) if reuse else None
+    wrote its packing. With reuse, a settle that finished in folder from the same scene text and the same btr program
+    (both kept beside it in settled_by.json) with the same engine is taken as it is, with its recorded times."""
+    stamp = folder / "settled_by.json"
+    done = finished_settle(btr, scene, folder, engine) if reuse else None
     if done is not None:
         progress(f"  [settle] reused the finished settle in {folder} ({done['cpu_seconds']:.1f} s CPU)")
         return done
     stamp.unlink(missing_ok=True)
     res = btr_cli.settle(btr, scene, engine, folder, np=ranks, seed=1, progress=progress)
-    shutil.copyfile(scene, stamp)
+    write_json(stamp, settled_by(btr, scene))
     return res
 
 
-def finished_settle(scene: str, folder: Path, engine: str) -> dict | None:
-    stamp, record_path = folder / "settled_scene.toml", folder / "settle.json"
-    if not (stamp.exists() and record_path.exists()) or stamp.read_text() != Path(scene).read_text():
+def settled_by(btr: str, scene: str) -> dict:
+    """What a settle's result depends on besides its options: the scene's text and the btr program (its SHA-256)."""
+    return {"scene": Path(scene).read_text(), "btr_sha256": hashlib.sha256(Path(btr).read_bytes()).hexdigest()}
+
+
+def finished_settle(btr: str, scene: str, folder: Path, engine: str) -> dict | None:
+    stamp, record_path = folder / "settled_by.json", folder / "settle.json"
+    if not (stamp.exists() and record_path.exists()) or read_json(stamp) != settled_by(btr, scene):
         return None
     record = read_json(record_path)
     csv = folder / f"{record.get('scene_name')}.csv"
