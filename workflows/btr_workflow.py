@@ -11,6 +11,7 @@
   hele-shaw [-o OUTDIR] [--reduced|--tiny] angle of repose in Hele-Shaw cells (seed 003): DEM, BTR, BTR + relax, BTR + ub-relax
   nano-powder [-o OUTDIR] [--cycles N]    rigid clusters redeposited: <h> = a - b exp(-n/tau) (2D, 3D)
   stratification [-o OUTDIR] [--tiny]     two-species heap in a Hele-Shaw cell: stripes, top-toe segregation, BTR vs DEM
+  settle-matrix -o OUTDIR [--count N]     btr settle against reference pours over beds and heaps (docs/settle)
 
 The `btr` program is $BTR_BINARY, else build/app/btr. Exit status: 0 done, 2 bad input, 3 a step failed
 (its error is printed and recorded in OUTDIR/run.json; what earlier steps wrote is kept)."""
@@ -171,6 +172,25 @@ def main(argv=None) -> int:
     st.add_argument("--seeds", help="comma-separated seeds (default 1,2,3)")
     st.add_argument("--n", type=int, help="grains of the 3D cases (default 3000; 2D: a third)")
 
+    sm = sub.add_parser("settle-matrix", help="btr settle against 3 reference pours per row: beds (friction, rolling "
+                                              "friction, size ratio, cylinder) and heaps (refused for now)")
+    sm.add_argument("-o", "--out", required=True)
+    sm.add_argument("--engine", choices=["liggghts", "yade"], default="liggghts")
+    sm.add_argument("--count", type=int, default=3000, help="grains of a bed row (default 3000)")
+    sm.add_argument("--depth", type=float, default=0.03, help="bed depth [m] the lateral size is chosen for (0.03)")
+    sm.add_argument("--heap-count", type=int, default=2000, help="grains of a heap row (default 2000)")
+    sm.add_argument("--yade-count", type=int, default=0,
+                    help="also the base bed in YADE with this many grains (optional row; default 0: none)")
+    sm.add_argument("--rows", help="comma-separated row names (default: all)")
+    sm.add_argument("--ref-seeds", type=int, default=3)
+    sm.add_argument("--np", type=int, default=1)
+    sm.add_argument("--margin", type=float, help=margin_help)
+    sm.add_argument("--reuse-pours", action="store_true",
+                    help="reuse the reference pours already finished in OUT/runs with the same scene and settings")
+    sm.add_argument("--reuse-settles", action="store_true",
+                    help="reuse a btr settle already finished in OUT/runs/ROW/settle from the same scene and engine")
+    sm.add_argument("--pours-only", action="store_true", help="the reference pours alone (no btr settle)")
+
     args = ap.parse_args(argv)
     if getattr(args, "out", None):
         # Every study runs btr and the engines inside its output folders: a relative -o must not nest.
@@ -275,6 +295,23 @@ def main(argv=None) -> int:
             if args.n is not None and args.n < 20:
                 raise InputError(f"--n: expected at least 20 grains, got {args.n}")
             run_stratification(args.out, args.tiny, seeds, args.n, progress=progress)
+        elif args.command == "settle-matrix":
+            from btrdem.studies.settle_matrix import run_settle_matrix
+            for name in ("count", "heap_count"):
+                if getattr(args, name) < 1:
+                    raise InputError(f"--{name.replace('_', '-')}: expected a positive number of grains, "
+                                     f"got {getattr(args, name)}")
+            if args.yade_count < 0 or not args.depth > 0:
+                raise InputError("--yade-count: expected 0 or more grains; --depth: expected a positive depth")
+            from btrdem.studies.settle_rows import matrix_rows
+            only = [x for x in (args.rows or "").split(",") if x] or None
+            try:
+                matrix_rows(only=only, yade_count=args.yade_count)
+            except ValueError as e:
+                raise InputError(f"--rows: {e}") from None
+            run_settle_matrix(args.out, args.count, args.depth, args.heap_count, args.yade_count, args.engine,
+                              args.ref_seeds, args.np, args.margin, args.reuse_pours, args.pours_only, only, progress,
+                              reuse_settles=args.reuse_settles)
     except Interrupted as e:
         print(f"btr_workflow.py {args.command}: {e}: the program it ran was stopped; run.json and the tables "
               "record the interrupted case", file=sys.stderr)

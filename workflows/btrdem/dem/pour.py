@@ -64,9 +64,20 @@ def pour(btr: Packing, outdir: str | os.PathLike, settings: PourSettings = PourS
     the engine, stop reason, simulated time, time step, batches, removed grains, the poured packing's path)."""
     if not btr.path:
         raise PourFailure("pour: the packing has no file; btr pour reads PACKING.csv and its JSON")
+    return _pour_file(btr.path, outdir, settings, progress)
+
+
+def pour_scene(scene_path: str, outdir: str | os.PathLike, settings: PourSettings = PourSettings(), progress=print,
+               count: int | None = None) -> dict:
+    """`btr pour SCENE.toml -o OUTDIR --seed S [--count N]`: the scene's own drops with the settings' seed (the
+    grains `btr deposit` would place with that seed), poured as pour() pours a packing; the same summary."""
+    return _pour_file(scene_path, outdir, settings, progress, [] if count is None else ["--count", str(int(count))])
+
+
+def _pour_file(input_path: str, outdir, settings: PourSettings, progress, extra=()) -> dict:
     out = Path(outdir).absolute()
-    res = btr_cli.pour(find_btr(), btr.path, settings.engine, out, np=settings.np, time_limit=settings.wall_time_limit,
-                       progress=progress, label=settings.label, extra_args=_arguments(settings))
+    res = btr_cli.pour(find_btr(), input_path, settings.engine, out, np=settings.np, time_limit=settings.wall_time_limit,
+                       progress=progress, label=settings.label, extra_args=_arguments(settings) + list(extra))
     if res["returncode"] != 0:
         raise PourFailure(f"{settings.label}: btr pour exited with status {res['returncode']}:\n"
                           f"{(res['error'] or '')[-3000:]}")
@@ -106,3 +117,22 @@ def finished_pour(btr: Packing, outdir: str | os.PathLike, settings: PourSetting
     if len(poured) != len(kept) or not np.allclose(poured.radius, btr.radius[kept], rtol=1e-12, atol=0.0):
         return None
     return dict(summary, reused=True)
+
+
+def finished_scene_pour(scene_path: str, outdir: str | os.PathLike, settings: PourSettings,
+                        count: int | None = None, progress=print) -> dict | None:
+    """finished_pour for a pour of a scene (pour_scene): the grains it must have are those `btr deposit` places with
+    the same scene, seed and count (docs/guide/pour.md, "Which grains"), deposited into OUTDIR/grains; the poured
+    scene (materials, container, source, relax settings) must also be that deposit's (a changed friction keeps the
+    radii)."""
+    out = Path(outdir)
+    if not (out / "poured.json").exists():
+        return None
+    dep = btr_cli.deposit(find_btr(), scene_path, out / "grains", "grains", settings.seed, count, progress,
+                          label="deposit-for-reuse")
+    grains = read_packing(dep["csv"])
+    poured_scene = read_json(out / "poured.json").get("scene") or {}
+    want = grains.scene()
+    if any(poured_scene.get(k) != want.get(k) for k in (set(poured_scene) | set(want)) - {"file"}):
+        return None
+    return finished_pour(grains, outdir, settings)

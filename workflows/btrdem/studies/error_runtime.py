@@ -18,6 +18,9 @@ standard deviation the error floor. Methods, each with its wall time measured in
   BTR + K shakes + relax   `btr shake` (K Jullien-Meakin cycles of BTR redeposition) then `btr relax`
   BTR + pre-loaded relax   `btr relax --preload` (a failed row with the reason where this build has none)
   BTR + pre-loaded damped  `btr relax --preload --damping D --max-overlap 0.1`
+  btr settle (engine)      `btr settle SCENE --count N` (issue 20): deposit, a small calibration pour whose packing
+                           fraction is the target, relaxation to it; its cost is settle.json's cpu_seconds (the
+                           calibration included); it never sees the reference pours' numbers
   DEM pour (pace p, stop s)  a pour of another seed, released p times faster than the reference's
                            pace and stopped at kinetic ratio s: shorter pours; the last one is the
                            reference's own settings
@@ -48,7 +51,7 @@ from .pipeline import default_outdir, scene_inputs
 from ..dem.pour import PourSettings, finished_pour, pour
 from ..core.runner import RunRecord, StepFailed, find_btr
 
-METHODS = ("relax", "damped", "target-phi", "target-phi-unbalanced", "shake", "preload", "preload-damped")
+METHODS = ("relax", "damped", "target-phi", "target-phi-unbalanced", "shake", "preload", "preload-damped", "settle")
 # The measures the verdict requires (the others are reported beside them).
 CORE_MEASURES = ("packing_fraction", "coordination", "rdf")
 # The pre-load's fit leaves neighbours up to ~0.07 r beyond their intended overlap at 10 000 grains
@@ -260,6 +263,9 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
             relax_row(row, f"relax_preload_damped{damping:g}", dep["csv"],
                       ["--preload", "--damping", repr(float(damping)), "--max-overlap", repr(PRELOAD_MAX_OVERLAP)],
                       dep)
+    if "settle" in methods:
+        with method(f"btr settle ({engine})", "settle", wall_seconds=None) as row:
+            settle_row(row, btr, scene_path, outdir / "settle", engine, count, ranks, margin, mean, names, progress)
     for k, (pace, stop) in enumerate(pour_variants):
         label = f"DEM pour pace {pace:g} stop {stop:.0e}"
         seed = ref_seeds + 1 + k
@@ -283,6 +289,17 @@ def run_error_vs_runtime(scene_path: str, outdir=None, engine: str = "liggghts",
     rec.finish({"verdict": verdict["summary"]})
     progress(verdict["summary"])
     return result
+
+
+def settle_row(row, btr, scene_path, folder, engine, count, ranks, margin, mean, names, progress):
+    """`btr settle` of the study's scene (its seed, the study's count and engine) into folder; its cost is
+    settle.json's cpu_seconds (calibration pour included)."""
+    res = btr_cli.settle(btr, scene_path, engine, folder, np=ranks, count=count, progress=progress)
+    record = res["record"]
+    row["values"] = m = measures_of(res["csv"], margin)
+    row.update(wall_seconds=record.get("wall_seconds", res["wall_seconds"]), cpu_seconds=res["cpu_seconds"],
+               errors=errors_of(m, mean, names), path=res["csv"], target_reached=res["target_reached"],
+               chosen=record.get("chosen"), settle_steps=record.get("steps"))
 
 
 def removed_by_relax(relaxed_csv) -> int:
@@ -364,11 +381,13 @@ def plot(path, rows, floor, limit, names) -> str:
                "target": ("*", "tab:purple"), "target-ub": ("h", "tab:pink"), "shake": ("D", "tab:olive"),
                "preload": ("P", "tab:orange"),
                "preload-damped": ("X", "tab:brown"),
+               "settle": ("p", "black"),
                "pour": ("^", "tab:red")}
     names_of = {"btr": "BTR", "relax": "BTR + relaxation", "damped": "BTR + damped relaxation",
                 "target": "BTR + target phi", "target-ub": "BTR + target phi (unbalanced-force rule)",
                 "shake": "BTR + shakes + relaxation", "preload": "BTR + pre-loaded",
                 "preload-damped": "BTR + pre-loaded damped",
+                "settle": "btr settle",
                 "pour": "DEM pour"}
     for ax, key in zip(axes[0], names):
         for kind, (mk, col) in markers.items():
