@@ -61,6 +61,7 @@ DropSequence::DropSequence(const Scene& scene, std::uint64_t seed)
       list_pos_(scene.grains.components.size(), 0),
       rng_(seed),
       count_(scene.grains.count) {
+  if (scene.container.kind == ContainerKind::Mesh) mesh_ = std::make_shared<const MeshIndex>(*scene.container.mesh, std::max(scene.container.size_x, scene.container.size_y) / 64.0);
   r_min_ = std::numeric_limits<double>::infinity();
   r_max_ = 0.0;
   if (source_.kind == SourceSpec::Kind::List) {
@@ -149,6 +150,19 @@ void DropSequence::position(double r, Drop& d) {
           if (three && c.periodic_ends) d.y = -0.5 * c.size_y + uniform() * c.size_y;
           else if (three) d.y = (-0.5 * c.size_y + r) + uniform() * (c.size_y - 2.0 * r);
           break;
+        case ContainerKind::Mesh: {
+          // Uniform over the part of its bounding box where a grain lands inside (drawn again elsewhere).
+          constexpr int kTries = 10000;
+          for (int k = 0; k < kTries; ++k) {
+            d.x = (-0.5 * c.size_x + r) + uniform() * (c.size_x - 2.0 * r);
+            d.y = (-0.5 * c.size_y + r) + uniform() * (c.size_y - 2.0 * r);
+            if (mesh_->footprint_misfit(d.x, d.y, r).empty()) return;
+          }
+          throw PlacementError(drawn_ + 1, "the rain cannot reach the footprint of the mesh " + c.mesh->file + ": none of " +
+                                               std::to_string(kTries) + " drops of radius " + std::to_string(r) +
+                                               " over its bounding box lands inside it (last: " +
+                                               mesh_->footprint_misfit(d.x, d.y, r) + ")");
+        }
         case ContainerKind::Periodic:
           d.x = -0.5 * c.size_x + uniform() * c.size_x;
           if (three) d.y = -0.5 * c.size_y + uniform() * c.size_y;
