@@ -105,7 +105,7 @@ double MeshIndex::fall_contact(int t, const Vec3& x, double r) const {
     else lo = a, a = b, fa = fb, b = lo + g * (hi - lo), fb = f(b);
   }
   const double z_min = 0.5 * (lo + hi);
-  if (f(z_min) > r) return nan;              // passes beside it
+  if (f(z_min) > r * (1.0 - 1e-10)) return nan;  // passes beside it, or grazes it (sliding down a vertical wall)
   if (z_min >= z0 - 1e-12 * r) return nan;   // the line moves away from it (or along it) from here down
   if (f(z0) <= r) return z0;                 // touching at the start and moving in
   double in = z_min, out = z0;               // f(in) <= r < f(out)
