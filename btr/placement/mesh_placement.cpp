@@ -52,6 +52,7 @@ struct Walker {
   std::vector<Partner> near;  // candidates gathered about `gathered_at`
   Vec3 gathered_at = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   std::vector<int> tris;
+  std::vector<Partner> entering;  // the partners a blocked step enters at its end
 
   double gap(const Partner& p, const Vec3& x) const {
     return p.tri >= 0 ? e.mesh.distance(p.tri, x) - r : (x - p.c).norm() - p.R;
@@ -255,11 +256,13 @@ Vec3 Walker::place(Vec3 x) {
       continue;
     }
     // The first point of the step where a partner is entered (1), a support unloads (2) or the contacts
-    // cannot be kept (3).
+    // cannot be kept (3). Inside a blocked step only the partners entered at its end are watched (one
+    // entered and left again within a step of r/10 would be a graze of depth ~1e-3 r at most).
+    const std::vector<Partner>* watched = &near;
     auto blocked = [&](double s, Vec3& p) {
       p = x + s * h * d;
       if (!project(p)) return 3;
-      for (const Partner& q : near)
+      for (const Partner& q : *watched)
         if (!has(q.key) && gap(q, p) < -tol) return 1;
       const Descent dd = descent_at(p);
       for (std::size_t i = 0; i < active.size(); ++i)
@@ -273,6 +276,11 @@ Vec3 Walker::place(Vec3 x) {
       h = std::min(h_max, 2.0 * h);
       continue;
     }
+    entering.clear();
+    if (why == 1)
+      for (const Partner& q : near)
+        if (!has(q.key) && gap(q, p1) < -tol) entering.push_back(q);
+    watched = &entering;
     double s0 = 0.0, s1 = 1.0;
     Vec3 p0 = x;
     for (int it = 0; it < 60; ++it) {
@@ -285,7 +293,7 @@ Vec3 Walker::place(Vec3 x) {
     x = p0;
     if (why == 1) {
       // The partners entered join (or replace a triangle touching at the same point).
-      for (const Partner& q : near)
+      for (const Partner& q : entering)
         if (!has(q.key) && gap(q, p1) < -tol) add(q, x);
     } else if (why == 2) {
       x = p1;  // just past the lift-off: the next descent releases the support
@@ -305,7 +313,7 @@ Vec3 Walker::place(Vec3 x) {
 }  // namespace
 
 Vec3 place_in_mesh(const MeshEngine& engine, std::int64_t id, Vec3 x, double r) {
-  Walker w{engine, id, r, {}, {}, Vec3::Constant(std::numeric_limits<double>::quiet_NaN()), {}};
+  Walker w{engine, id, r, {}, {}, Vec3::Constant(std::numeric_limits<double>::quiet_NaN()), {}, {}};
   x = w.place(x);
   if (!x.allFinite()) throw PlacementError(id, "the placement ended at a non-finite position");
   if (engine.mesh.crossings_below(x.x(), x.y(), x.z()) % 2 == 0)
