@@ -23,6 +23,7 @@ namespace btr {
 inline constexpr const char* kLiggghtsScript = "in.btr";
 inline constexpr const char* kLiggghtsData = "btr.data";
 inline constexpr const char* kLiggghtsMesh = "btr_mesh.stl";  // a mesh container's triangles, as placed
+inline constexpr const char* kLiggghtsScreen = "screen.liggghts";  // a mesh container's run: LIGGGHTS' screen
 inline constexpr const char* kLiggghtsLog = "log.liggghts";  // also LIGGGHTS' default log name
 inline constexpr const char* kLiggghtsFinalDump = "btr_final.dump";
 inline constexpr const char* kLiggghtsContactsDump = "btr_contacts.dump";
