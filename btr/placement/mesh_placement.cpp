@@ -116,17 +116,19 @@ struct Walker {
   bool project(Vec3& x) const {
     const std::size_t k = active.size();
     if (k == 0 || k > 2) return k == 0;
+    // 1e-14 r, or a few ulps of the coordinates where they are large against r (a big container)
+    const double eps = 1e-14 * r + 1e-15 * x.cwiseAbs().maxCoeff();
     for (int it = 0; it < 40; ++it) {
       const double g0 = gap(active[0], x);
       const Vec3 n0 = normal(active[0], x);
       if (k == 1) {
-        if (std::abs(g0) <= 1e-14 * r) return x.allFinite();
+        if (std::abs(g0) <= eps) return x.allFinite();
         x -= g0 * n0;
         continue;
       }
       const double g1 = gap(active[1], x);
       const Vec3 n1 = normal(active[1], x);
-      if (std::max(std::abs(g0), std::abs(g1)) <= 1e-14 * r) return x.allFinite();
+      if (std::max(std::abs(g0), std::abs(g1)) <= eps) return x.allFinite();
       // x -= N (N^T N)^-1 g with N = [n0 n1]
       const double c = n0.dot(n1), det = 1.0 - c * c;
       if (!(det > 1e-12)) return false;
@@ -142,6 +144,18 @@ struct Walker {
     return descend(n, active.size());
   }
 
+  // What a grain that cannot move on holds: its contacts (grain or triangle, with their normals).
+  std::string stuck(const char* what, const Vec3& x, const Vec3& d) const {
+    std::ostringstream s;
+    s << what << " (direction " << d.x() << ", " << d.y() << ", " << d.z() << "; contacts:";
+    for (const Partner& p : active) {
+      const Vec3 n = normal(p, x);
+      s << " " << (p.tri >= 0 ? "triangle " + std::to_string(p.tri) : "grain " + std::to_string((p.key >> 30) + 1))
+        << " normal (" << n.x() << ", " << n.y() << ", " << n.z() << ")";
+    }
+    s << ")";
+    return s.str();
+  }
   void fall(Vec3& x);
   bool roll_off_top(const Vec3& x, Vec3& d, std::uint64_t salt) const;
   Vec3 place(Vec3 x);
@@ -251,7 +265,7 @@ Vec3 Walker::place(Vec3 x) {
       h *= 0.5;
       if (h < 1e-10 * r) {
         if (active.size() == 2) return x;  // the lowest point of the two contacts' curve
-        fail("cannot follow its contacts", x);
+        fail(stuck("cannot go down along its contacts", x, d), x);
       }
       continue;
     }
@@ -299,7 +313,7 @@ Vec3 Walker::place(Vec3 x) {
       x = p1;  // just past the lift-off: the next descent releases the support
     } else {
       h *= 0.5;
-      if (h < 1e-10 * r) fail("cannot follow its contacts", x);
+      if (h < 1e-10 * r) fail(stuck("cannot keep its contacts along its path", x, d), x);
       continue;
     }
     h = h_max;
