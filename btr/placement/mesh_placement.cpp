@@ -297,17 +297,30 @@ Vec3 Walker::place(Vec3 x) {
     watched = &entering;
     double s0 = 0.0, s1 = 1.0;
     Vec3 p0 = x;
-    for (int it = 0; it < 60; ++it) {
-      const double sm = 0.5 * (s0 + s1);
-      Vec3 pm;
-      const int w = blocked(sm, pm);
-      if (w) s1 = sm, p1 = pm, why = w;
-      else s0 = sm, p0 = pm;
+    auto bisect = [&] {
+      for (int it = 0; it < 60; ++it) {
+        const double sm = 0.5 * (s0 + s1);
+        Vec3 pm;
+        const int w = blocked(sm, pm);
+        if (w) s1 = sm, p1 = pm, why = w;
+        else s0 = sm, p0 = pm;
+      }
+    };
+    bisect();
+    // A partner the step only grazed (entered and left before its end) may hold the point found: then
+    // again, watching every partner near, so the grain stops where it first meets one.
+    bool grazed = false;
+    for (const Partner& q : near) grazed |= !has(q.key) && gap(q, p0) < -tol;
+    if (grazed) {
+      watched = &near;
+      s0 = 0.0, s1 = 1.0, p0 = x;
+      why = blocked(1.0, p1);
+      bisect();
     }
     x = p0;
     if (why == 1) {
       // The partners entered join (or replace a triangle touching at the same point).
-      for (const Partner& q : entering)
+      for (const Partner& q : *watched)
         if (!has(q.key) && gap(q, p1) < -tol) add(q, x);
     } else if (why == 2) {
       x = p1;  // just past the lift-off: the next descent releases the support
