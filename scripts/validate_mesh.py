@@ -6,10 +6,10 @@ filled hopper (inputs/hopper.toml).
 
     /usr/bin/python3 scripts/validate_mesh.py [--btr build/app/btr] [--seeds 5] [--count 3000] [-o docs/mesh]
 
-Writes OUT/mesh_validation.json and OUT/hopper.png. The window: centres within R - 2 d_max of the axis
-and 2 d_max above the floor up to 2 d_max below the lowest tenth percentile of the top layer... simply
-the 90th percentile of centre heights less 2 d_max; a grain counts by its centre (the same rule for both
-containers, so the comparison is fair; the absolute value is biased low by the window's edges)."""
+Writes OUT/mesh_validation.json and OUT/hopper.png. The window: centres within R - 2 d_max of the axis,
+from 2 d_max above the floor up to the 90th percentile of centre heights less 2 d_max; a grain counts by
+its centre (the same rule for both containers, so the comparison is fair; the absolute value is biased
+low by the window's edges)."""
 import argparse
 import json
 import os
