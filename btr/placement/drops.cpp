@@ -71,6 +71,7 @@ DropSequence::DropSequence(const Scene& scene, std::uint64_t seed)
                        std::to_string(listed_.size()) + " rows");
     listed_.resize(static_cast<std::size_t>(count_));
     for (const auto& d : listed_) r_min_ = std::min(r_min_, d.r), r_max_ = std::max(r_max_, d.r);
+    check_mesh_footprint(scene);
     return;
   }
   if (scene.intruder) {
@@ -95,6 +96,37 @@ DropSequence::DropSequence(const Scene& scene, std::uint64_t seed)
         break;
       default: r_min_ = std::min(r_min_, r.min), r_max_ = std::max(r_max_, r.max);
     }
+  }
+  check_mesh_footprint(scene);
+}
+
+// A mesh container's point, region and list sources are checked against its footprint before any grain
+// is placed: the largest grain at the point (and around its scatter circle), the region's corners and
+// centre, every listed drop. The rain draws only inside it (position).
+void DropSequence::check_mesh_footprint(const Scene& scene) const {
+  if (!mesh_) return;
+  const SourceSpec& s = source_;
+  auto refuse_if_outside = [&](double x, double y, double r, const std::string& where) {
+    const std::string why = mesh_->footprint_misfit(x, y, r);
+    if (!why.empty())
+      throw SceneError(scene.file + ": " + where + ": expected drops that land inside the mesh container, got " + why);
+  };
+  switch (s.kind) {
+    case SourceSpec::Kind::Point:
+      refuse_if_outside(s.x, s.y, r_max_, "source.position");
+      for (int k = 0; k < 8 && s.scatter > 0.0; ++k)
+        refuse_if_outside(s.x + s.scatter * std::cos(k * M_PI / 4), s.y + s.scatter * std::sin(k * M_PI / 4), r_max_,
+                          "source.scatter");
+      break;
+    case SourceSpec::Kind::Region:
+      for (double x : {s.x_min, 0.5 * (s.x_min + s.x_max), s.x_max})
+        for (double y : {s.y_min, 0.5 * (s.y_min + s.y_max), s.y_max}) refuse_if_outside(x, y, r_max_, "source.x, source.y");
+      break;
+    case SourceSpec::Kind::List:
+      for (const ListedDrop& d : listed_)
+        refuse_if_outside(d.x, d.y, d.r, s.file + ":" + std::to_string(d.line));
+      break;
+    case SourceSpec::Kind::Rain: break;
   }
 }
 

@@ -47,6 +47,7 @@ class DropSequence {
   double radius(std::size_t component);
   void disk(double radius, double& x, double& y);  // uniform on the disk about 0
   void position(double r, Drop& d);
+  void check_mesh_footprint(const Scene& scene) const;  // SceneError: a source that cannot reach the mesh
 
   int dimension_;
   Container container_;

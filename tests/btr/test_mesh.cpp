@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "btr/placement/deposition.h"
+#include "btr/placement/drops.h"
 #include "btr/placement/mesh_index.h"
 #include "btr/placement/run_scene.h"
 #include "btr/scene/mesh_file.h"
@@ -382,4 +383,28 @@ file = "x.stl"
 kind = "rain"
 )");
   EXPECT_THROW(load_scene(box), SceneError);
+}
+
+TEST_F(MeshFile, ASourceThatCannotReachTheFootprintIsRefusedBeforePlacing) {
+  const std::string scene = write("p.toml", R"([scene]
+dimension = 3
+[grains]
+count = 10
+radius = { distribution = "constant", value = 1e-3 }
+[container]
+kind = "mesh"
+file = ")" + std::string(BTR_SOURCE_DIR) + R"(/tests/data/open_hopper.stl"
+scale = 1e-3
+[source]
+kind = "point"
+position = [0.0, 0.0]
+)");
+  const Scene s = load_scene(scene);
+  try {
+    DropSequence drops(s, 1);
+    FAIL() << "a point source over the open outlet was accepted";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("source.position"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("open_hopper.stl"), std::string::npos) << e.what();
+  }
 }
