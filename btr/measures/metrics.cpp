@@ -329,6 +329,11 @@ BulkMeasures bulk_measures(const Grains& grains, int dimension, const Container&
     m.note = "no bulk window in a drum (its floor is the curved wall); see the drum measures of `btr drum`";
     return m;
   }
+  if (container.kind == ContainerKind::Mesh) {
+    // A box bounded by the grains' extent would reach beyond a hopper's sloping walls.
+    m.note = "no bulk window in a mesh container (its walls have any shape); measure a window of your own";
+    return m;
+  }
   const double d = 2.0 * max_radius(grains);
   const double margin = options.margin_diameters * d;
   const bool three = dimension == 3;

@@ -10,6 +10,7 @@ const char* to_string(ContainerKind kind) {
     case ContainerKind::HeleShaw: return "hele-shaw";
     case ContainerKind::Cylinder: return "cylinder";
     case ContainerKind::Drum: return "drum";
+    case ContainerKind::Mesh: return "mesh";
   }
   return "?";
 }

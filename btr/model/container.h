@@ -9,14 +9,18 @@
 //   drum       horizontal cylinder of radius `radius` with its axis along y at height z = radius (its
 //              lowest line is the floor z = 0); 3D: flat end walls at y = +-size_y/2 (its length)
 //              or, with periodic_ends, periodic in y with period size_y; 2D: a circle of disks in the x-z plane
+//   mesh       (3D only) a triangle mesh read from an STL file (btr/model/mesh.h); size_x, size_y and
+//              height are its bounding box, centred on the z axis, its lowest point at z = 0
 #include <cmath>
+#include <memory>
 #include <string>
 
 #include "btr/model/grain.h"
+#include "btr/model/mesh.h"
 
 namespace btr {
 
-enum class ContainerKind { Open, Box, Periodic, HeleShaw, Cylinder, Drum };
+enum class ContainerKind { Open, Box, Periodic, HeleShaw, Cylinder, Drum, Mesh };
 
 struct Container {
   ContainerKind kind = ContainerKind::Open;
@@ -26,6 +30,7 @@ struct Container {
   double radius = 0.0;  // cylinder, drum inner radius [m]
   double height = 0.0;  // optional wall height for the DEM stage; 0 = derived from the packing
   bool periodic_ends = false;  // drum (3D): periodic in y with period size_y instead of flat end walls
+  std::shared_ptr<const TriangleMesh> mesh;  // mesh: the triangles, as placed
 };
 
 // Axes along which the container wraps, with the domain [-L/2, L/2): x in a periodic container; y in a

@@ -14,6 +14,8 @@
 #include "btr/placement/circle_arc.h"
 #include "btr/placement/cluster_placement.h"
 #include "btr/placement/descent.h"
+#include "btr/placement/mesh_index.h"
+#include "btr/placement/mesh_placement.h"
 #include "btr/placement/neighbour_grid.h"
 #include "btr/placement/obstacle.h"
 #include "btr/placement/walls.h"
@@ -108,9 +110,13 @@ struct Deposition::Impl {
   double top = 0.0;  // highest grain top so far
   std::int32_t clusters = 0;  // rigid clusters placed so far
   std::vector<Obstacle> walls;  // the container as obstacles for the grain being placed (reused)
+  std::unique_ptr<MeshIndex> mesh;  // a mesh container's triangles (btr/placement/mesh_placement.cpp)
 
   Impl(int dim, const Container& c, double rmax, int events)
-      : dimension(dim), container(c), r_max(rmax), max_events(events), grid(dim, c, rmax) {}
+      : dimension(dim), container(c), r_max(rmax), max_events(events), grid(dim, c, rmax) {
+    if (c.kind == ContainerKind::Mesh) mesh = std::make_unique<MeshIndex>(*c.mesh, 2.0 * rmax);
+  }
+  const Grain& place_mesh(std::int64_t id, const Drop& drop, double px, double py);
 
   static Obstacle sphere(std::int32_t i, const Vec3& centre, double radius, int image, double r) {
     Obstacle o;
@@ -649,6 +655,7 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
   const std::string misfit = drop_misfit(container, dimension, px, py, r);
   if (!misfit.empty()) throw PlacementError(id, "dropped outside the container: " + misfit);
   onto_footprint(container, dimension, px, py, r);
+  if (mesh) return place_mesh(id, drop, px, py);
 
   container_walls(container, dimension, r, walls);
   Vec3 x(px, py, 0.0);
@@ -817,6 +824,26 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
   try {
     grid.insert(static_cast<std::int32_t>(grains.size()), x, r);
   } catch (const std::exception& e) {  // an escaped grain, or an open floor's grid out of budget
+    throw PlacementError(id, e.what());
+  }
+  grains.push_back(Grain{x, r, drop.species});
+  top = std::max(top, x.z() + r);
+  return grains.back();
+}
+
+// ---------------------------------------------------------------------------------------------
+// A mesh container: from above the mesh and the pile, onto the triangles and grains (mesh_placement.h).
+const Grain& Deposition::Impl::place_mesh(std::int64_t id, const Drop& drop, double px, double py) {
+  const double r = drop.r;
+  if (!std::isnan(drop.z))
+    throw PlacementError(id, "a start height is not supported in a mesh container (dynamic BTR needs another container)");
+  const std::string misfit = mesh->footprint_misfit(px, py, r);
+  if (!misfit.empty()) throw PlacementError(id, "dropped outside the container: " + misfit);
+  const Vec3 start(px, py, std::max(top, container.mesh->hi.z()) + r + 2.0 * r_max);
+  const Vec3 x = place_in_mesh(MeshEngine{grid, *mesh, r_max, max_events}, id, start, r);
+  try {
+    grid.insert(static_cast<std::int32_t>(grains.size()), x, r);
+  } catch (const std::exception& e) {
     throw PlacementError(id, e.what());
   }
   grains.push_back(Grain{x, r, drop.species});

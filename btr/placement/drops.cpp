@@ -61,6 +61,7 @@ DropSequence::DropSequence(const Scene& scene, std::uint64_t seed)
       list_pos_(scene.grains.components.size(), 0),
       rng_(seed),
       count_(scene.grains.count) {
+  if (scene.container.kind == ContainerKind::Mesh) mesh_ = std::make_shared<const MeshIndex>(*scene.container.mesh, std::max(scene.container.size_x, scene.container.size_y) / 64.0);
   r_min_ = std::numeric_limits<double>::infinity();
   r_max_ = 0.0;
   if (source_.kind == SourceSpec::Kind::List) {
@@ -70,6 +71,7 @@ DropSequence::DropSequence(const Scene& scene, std::uint64_t seed)
                        std::to_string(listed_.size()) + " rows");
     listed_.resize(static_cast<std::size_t>(count_));
     for (const auto& d : listed_) r_min_ = std::min(r_min_, d.r), r_max_ = std::max(r_max_, d.r);
+    check_mesh_footprint(scene);
     return;
   }
   if (scene.intruder) {
@@ -94,6 +96,37 @@ DropSequence::DropSequence(const Scene& scene, std::uint64_t seed)
         break;
       default: r_min_ = std::min(r_min_, r.min), r_max_ = std::max(r_max_, r.max);
     }
+  }
+  check_mesh_footprint(scene);
+}
+
+// A mesh container's point, region and list sources are checked against its footprint before any grain
+// is placed: the largest grain at the point (and around its scatter circle), the region's corners and
+// centre, every listed drop. The rain draws only inside it (position).
+void DropSequence::check_mesh_footprint(const Scene& scene) const {
+  if (!mesh_) return;
+  const SourceSpec& s = source_;
+  auto refuse_if_outside = [&](double x, double y, double r, const std::string& where) {
+    const std::string why = mesh_->footprint_misfit(x, y, r);
+    if (!why.empty())
+      throw SceneError(scene.file + ": " + where + ": expected drops that land inside the mesh container, got " + why);
+  };
+  switch (s.kind) {
+    case SourceSpec::Kind::Point:
+      refuse_if_outside(s.x, s.y, r_max_, "source.position");
+      for (int k = 0; k < 8 && s.scatter > 0.0; ++k)
+        refuse_if_outside(s.x + s.scatter * std::cos(k * M_PI / 4), s.y + s.scatter * std::sin(k * M_PI / 4), r_max_,
+                          "source.scatter");
+      break;
+    case SourceSpec::Kind::Region:
+      for (double x : {s.x_min, 0.5 * (s.x_min + s.x_max), s.x_max})
+        for (double y : {s.y_min, 0.5 * (s.y_min + s.y_max), s.y_max}) refuse_if_outside(x, y, r_max_, "source.x, source.y");
+      break;
+    case SourceSpec::Kind::List:
+      for (const ListedDrop& d : listed_)
+        refuse_if_outside(d.x, d.y, d.r, s.file + ":" + std::to_string(d.line));
+      break;
+    case SourceSpec::Kind::Rain: break;
   }
 }
 
@@ -149,6 +182,19 @@ void DropSequence::position(double r, Drop& d) {
           if (three && c.periodic_ends) d.y = -0.5 * c.size_y + uniform() * c.size_y;
           else if (three) d.y = (-0.5 * c.size_y + r) + uniform() * (c.size_y - 2.0 * r);
           break;
+        case ContainerKind::Mesh: {
+          // Uniform over the part of its bounding box where a grain lands inside (drawn again elsewhere).
+          constexpr int kTries = 10000;
+          for (int k = 0; k < kTries; ++k) {
+            d.x = (-0.5 * c.size_x + r) + uniform() * (c.size_x - 2.0 * r);
+            d.y = (-0.5 * c.size_y + r) + uniform() * (c.size_y - 2.0 * r);
+            if (mesh_->footprint_misfit(d.x, d.y, r).empty()) return;
+          }
+          throw PlacementError(drawn_ + 1, "the rain cannot reach the footprint of the mesh " + c.mesh->file + ": none of " +
+                                               std::to_string(kTries) + " drops of radius " + std::to_string(r) +
+                                               " over its bounding box lands inside it (last: " +
+                                               mesh_->footprint_misfit(d.x, d.y, r) + ")");
+        }
         case ContainerKind::Periodic:
           d.x = -0.5 * c.size_x + uniform() * c.size_x;
           if (three) d.y = -0.5 * c.size_y + uniform() * c.size_y;

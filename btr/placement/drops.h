@@ -10,11 +10,13 @@
 // A scene's [intruder] is the first drop (no draws), before the count bed grains.
 // Only +, -, *, / and sqrt touch the draws, so the sequence is bit-identical on any IEEE machine.
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <random>
 #include <vector>
 
 #include "btr/placement/deposition.h"
+#include "btr/placement/mesh_index.h"
 #include "btr/scene/drop_list.h"
 #include "btr/scene/scene.h"
 
@@ -45,6 +47,7 @@ class DropSequence {
   double radius(std::size_t component);
   void disk(double radius, double& x, double& y);  // uniform on the disk about 0
   void position(double r, Drop& d);
+  void check_mesh_footprint(const Scene& scene) const;  // SceneError: a source that cannot reach the mesh
 
   int dimension_;
   Container container_;
@@ -54,6 +57,7 @@ class DropSequence {
   std::vector<std::size_t> list_pos_;  // next index of each component's radius list
   std::vector<ListedDrop> listed_;
   std::optional<IntruderSpec> intruder_;  // the first drop, when the scene has one
+  std::shared_ptr<const MeshIndex> mesh_;  // a mesh container: rain lands only inside its footprint
   std::mt19937_64 rng_;
   std::int64_t count_ = 0, drawn_ = 0;
   double r_min_ = 0.0, r_max_ = 0.0;

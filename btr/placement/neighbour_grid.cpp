@@ -30,6 +30,7 @@ NeighbourGrid::NeighbourGrid(int dimension, const Container& c, double r_max)
       iy0_ = dimension == 3 ? -8 : 0; ny_ = dimension == 3 ? 16 : 1;
       break;
     case ContainerKind::Box:
+    case ContainerKind::Mesh:  // its bounding box, centred on the z axis
     case ContainerKind::Periodic:
       span(c.size_x, x0_, nx_, hx_, wrap_x_);
       if (dimension == 3) span(c.size_y, y0_, ny_, hy_, wrap_y_);

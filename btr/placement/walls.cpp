@@ -32,6 +32,7 @@ void container_walls(const Container& c, int dimension, double r, std::vector<Ob
   switch (c.kind) {
     case ContainerKind::Open:
     case ContainerKind::Periodic:
+    case ContainerKind::Mesh:  // the triangles are the walls (btr/placement/mesh_placement.cpp)
       break;
     case ContainerKind::Box:
       x_walls(0.5 * c.size_x);
@@ -79,6 +80,7 @@ Footprint footprint(const Container& c, int dimension) {
     case ContainerKind::Periodic:
       break;
     case ContainerKind::Box:
+    case ContainerKind::Mesh:  // its bounding box; the mesh's own footprint is MeshIndex::footprint_misfit
       f.bound_x = true, f.wall_x = 0.5 * c.size_x;
       f.bound_y = dimension == 3, f.wall_y = 0.5 * c.size_y;
       break;

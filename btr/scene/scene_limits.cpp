@@ -62,6 +62,10 @@ std::vector<Length> lengths(const Scene& s) {
       out.push_back({"container.radius", "container.radius", c.radius, true});
       if (s.dimension == 3) out.push_back({"container.size_y", "container.length", c.size_y, true});
       break;
+    case ContainerKind::Mesh:  // its bounding box, as placed
+      out.push_back({"container.size_x", "container.file", c.size_x, true});
+      out.push_back({"container.size_y", "container.file", c.size_y, true});
+      break;
     case ContainerKind::Open: break;
   }
   if (c.height != 0.0) out.push_back({"container.height", "container.height", c.height});  // 0: from the packing

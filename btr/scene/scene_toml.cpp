@@ -1,4 +1,5 @@
 #include "btr/scene/scene_toml.h"
+#include "btr/scene/mesh_file.h"
 
 #include <algorithm>
 #include <cmath>
@@ -383,11 +384,11 @@ class SceneParser {
   }
 
   void parse_container(const Section& s) {
-    rd_.check_keys(s, {"kind", "size", "gap", "radius", "height", "length", "ends"});
+    rd_.check_keys(s, {"kind", "size", "gap", "radius", "height", "length", "ends", "file", "scale"});
     Container& c = scene_.container;
     const std::string kind =
-        rd_.required_choice(s, "kind", {"open", "box", "periodic", "hele-shaw", "cylinder", "drum"});
-    if (dim() == 2 && (kind == "hele-shaw" || kind == "cylinder"))
+        rd_.required_choice(s, "kind", {"open", "box", "periodic", "hele-shaw", "cylinder", "drum", "mesh"});
+    if (dim() == 2 && (kind == "hele-shaw" || kind == "cylinder" || kind == "mesh"))
       rd_.fail(Reader::line_of(*rd_.get(s, "kind")),
                "container.kind: expected \"open\", \"box\" or \"periodic\" for dimension 2 (" + kind +
                    " is 3D only), got " + quoted(kind));
@@ -396,9 +397,14 @@ class SceneParser {
              : kind == "periodic" ? ContainerKind::Periodic
              : kind == "hele-shaw" ? ContainerKind::HeleShaw
              : kind == "cylinder"  ? ContainerKind::Cylinder
+             : kind == "mesh"      ? ContainerKind::Mesh
                                    : ContainerKind::Drum;
     const std::string why = "by kind = " + quoted(kind);
-    if (kind == "open" || kind == "cylinder" || kind == "drum") rd_.forbid(s, "size", why);
+    if (kind == "open" || kind == "cylinder" || kind == "drum" || kind == "mesh") rd_.forbid(s, "size", why);
+    if (kind != "mesh") {
+      rd_.forbid(s, "file", why + " (only mesh has a file)");
+      rd_.forbid(s, "scale", why + " (only mesh has a scale)");
+    }
     if (kind != "hele-shaw") rd_.forbid(s, "gap", why + " (only hele-shaw has a gap)");
     if (kind != "cylinder" && kind != "drum") rd_.forbid(s, "radius", why + " (only cylinder and drum have a radius)");
     if (kind != "drum" || dim() == 2) rd_.forbid(s, "length", why + (dim() == 2 ? " in 2D" : "") + " (only a 3D drum has a length)");
@@ -426,7 +432,30 @@ class SceneParser {
     }
     if (kind == "hele-shaw") c.gap = rd_.required_number(s, "gap", positive, "a positive plate distance w [m]");
     if (kind == "cylinder") c.radius = rd_.required_number(s, "radius", positive, "a positive radius [m]");
+    if (kind == "mesh") parse_mesh(s, c);
     c.height = rd_.number_or(s, "height", 0.0, positive, "a positive wall height [m]");
+  }
+
+  // container.file (an STL file, relative to the scene's folder) and container.scale: the mesh is read
+  // here, so every later check (grain size, footprint) sees its placed bounding box.
+  void parse_mesh(const Section& s, Container& c) {
+    const toml::node* f = rd_.get(s, "file");
+    if (!f) rd_.missing(s, "file", "an STL file (ASCII or binary), relative to the scene file");
+    const auto file = f->value<std::string>();
+    if (!file || file->empty())
+      rd_.fail(Reader::line_of(*f), "container.file: expected the path of an STL file, got a " +
+                                        std::string(file ? "empty string" : "value of another type"));
+    namespace fs = std::filesystem;
+    fs::path p(*file);
+    if (p.is_relative()) p = fs::path(path_).parent_path() / p;
+    const double scale = rd_.number_or(s, "scale", 1.0, positive, "a positive scale (1e-3: the file is in mm)");
+    try {
+      c.mesh = read_mesh(p.string(), scale);
+    } catch (const SceneError& e) {
+      rd_.fail(Reader::line_of(*f), std::string("container.file: ") + e.what());
+    }
+    c.size_x = c.mesh->hi.x() - c.mesh->lo.x();
+    c.size_y = c.mesh->hi.y() - c.mesh->lo.y();
   }
 
   void parse_source(const Section& s, const std::string& kind) {
@@ -533,6 +562,13 @@ class SceneParser {
         if (c.radius < r_max_)
           rd_.fail(line("radius"), "container.radius: expected at least " + r_max_text() + ", got " + fmt(c.radius));
         return;
+      case ContainerKind::Mesh:
+        if (c.size_x < d || c.size_y < d || c.mesh->hi.z() < d)
+          rd_.fail(line("file"), "container.file: " + c.mesh->file + ": the mesh is smaller than one grain: expected a "
+                                     "bounding box of at least the diameter of " + r_max_text() + ", 2 r_max = " +
+                                     fmt(d) + " m, each way, got " + fmt(c.size_x) + " x " + fmt(c.size_y) + " x " +
+                                     fmt(c.mesh->hi.z()));
+        return;
       case ContainerKind::HeleShaw:
         if (c.gap < d)
           rd_.fail(line("gap"), "container.gap: expected at least the diameter of " + r_max_text() + ", 2 r_max = " +
@@ -551,7 +587,8 @@ class SceneParser {
     const Container& c = scene_.container;
     const double inf = std::numeric_limits<double>::infinity();
     switch (c.kind) {
-      case ContainerKind::Box: return {c.size_x / 2 - r, c.size_y / 2 - r};
+      case ContainerKind::Box:
+      case ContainerKind::Mesh: return {c.size_x / 2 - r, c.size_y / 2 - r};
       case ContainerKind::Periodic: return {c.size_x / 2, c.size_y / 2};
       case ContainerKind::HeleShaw: return {c.size_x / 2 - r, c.gap / 2 - r};
       case ContainerKind::Drum: return {c.radius - r, c.periodic_ends ? c.size_y / 2 : c.size_y / 2 - r};
@@ -601,6 +638,9 @@ class SceneParser {
       case ContainerKind::Box:
       case ContainerKind::Periodic:
         refuse_if_too_large(c.size_x, c.size_y, container, "size", std::max(c.size_x, c.size_y));
+        return;
+      case ContainerKind::Mesh:
+        refuse_if_too_large(c.size_x, c.size_y, container, "file", std::max(c.size_x, c.size_y));
         return;
       case ContainerKind::HeleShaw:
         if (c.gap > c.size_x) refuse_if_too_large(c.size_x, c.gap, container, "gap", c.gap);

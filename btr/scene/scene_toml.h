@@ -29,8 +29,10 @@
 //     material  inline table     keys of [material]; each missing key falls back to [material]
 //
 // [container]                    required
-//   kind    "open" | "box" | "periodic" | "hele-shaw" | "cylinder" | "drum"
-//           hele-shaw and cylinder are 3D only. Coordinates are centred on the z axis (container.h).
+//   kind    "open" | "box" | "periodic" | "hele-shaw" | "cylinder" | "drum" | "mesh"
+//           hele-shaw, cylinder and mesh are 3D only. Coordinates are centred on the z axis (container.h).
+//   file    mesh only: an STL file (ASCII or binary), relative to the scene file's folder (mesh_file.h)
+//   scale   mesh only: > 0, multiplies the file's coordinates (default 1; 1e-3 for a CAD file in mm)
 //   size    box, periodic: [x] in 2D, [x, y] in 3D; hele-shaw: [x] (cell length). Not for open, cylinder.
 //   gap     hele-shaw only: plate distance w (>= the largest grain diameter)
 //   radius  cylinder and drum: inner radius (>= the largest grain radius)

@@ -218,6 +218,7 @@ Walls walls_of(const Container& c, int dimension, const Vec3& p, double r) {
   switch (c.kind) {
     case ContainerKind::Open:
     case ContainerKind::Periodic:
+    case ContainerKind::Mesh:  // the triangles are judged apart (MeshJudge)
       break;
     case ContainerKind::Box:
       pair_of_planes(0, 0.5 * c.size_x);
@@ -244,6 +245,72 @@ Walls walls_of(const Container& c, int dimension, const Vec3& p, double r) {
   }
   return w;
 }
+
+// A mesh container's triangles, judged with geometry of the check's own (not the placement's): the
+// nearest point of a triangle by projection onto its plane and, outside it, onto its three sides; inside
+// or outside by counting the triangles a ray from the centre crosses, the ray tilted off the vertical so
+// that it passes beside the shared edges and vertices of a symmetric mesh.
+class MeshJudge {
+ public:
+  explicit MeshJudge(const TriangleMesh& m) : m_(m) {
+    for (const auto& f : m.triangles) {
+      const Vec3 &a = m.vertices[f[0]], &b = m.vertices[f[1]], &c = m.vertices[f[2]];
+      lo_.push_back(a.cwiseMin(b).cwiseMin(c));
+      hi_.push_back(a.cwiseMax(b).cwiseMax(c));
+    }
+  }
+  std::size_t size() const { return m_.triangles.size(); }
+  bool near(std::size_t t, const Vec3& p, double reach) const {
+    return ((p.array() + reach) >= lo_[t].array()).all() && ((p.array() - reach) <= hi_[t].array()).all();
+  }
+  Vec3 nearest(std::size_t t, const Vec3& p) const {
+    const auto& f = m_.triangles[t];
+    const Vec3 &a = m_.vertices[f[0]], &b = m_.vertices[f[1]], &c = m_.vertices[f[2]];
+    const Vec3 n = (b - a).cross(c - a);
+    const Vec3 q = p - n * (n.dot(p - a) / n.squaredNorm());
+    // q inside: on the inner side of every edge.
+    const bool in = n.dot((b - a).cross(q - a)) >= 0 && n.dot((c - b).cross(q - b)) >= 0 && n.dot((a - c).cross(q - c)) >= 0;
+    if (in) return q;
+    auto on_segment = [&](const Vec3& u, const Vec3& v) {
+      const double s = std::clamp((p - u).dot(v - u) / (v - u).squaredNorm(), 0.0, 1.0);
+      return Vec3(u + s * (v - u));
+    };
+    Vec3 best = on_segment(a, b);
+    for (const Vec3& cand : {on_segment(b, c), on_segment(c, a)})
+      if ((p - cand).squaredNorm() < (p - best).squaredNorm()) best = cand;
+    return best;
+  }
+  // Triangles crossed by the ray from p going down (tilted by about 1e-6 rad): odd is inside.
+  int crossings_below(const Vec3& p) const {
+    const Vec3 dir = Vec3(0.7071067811865476e-6, 0.5773502691896258e-6, -1.0).normalized();
+    int count = 0;
+    for (std::size_t t = 0; t < size(); ++t) {
+      if (lo_[t].z() > p.z()) continue;  // the ray goes down
+      const double drift = 1e-6 * (p.z() - lo_[t].z()) + 1e-12 * (1.0 + std::abs(p.x()) + std::abs(p.y()));
+      if (p.x() < lo_[t].x() - drift || p.x() > hi_[t].x() + drift || p.y() < lo_[t].y() - drift ||
+          p.y() > hi_[t].y() + drift)
+        continue;
+      const auto& f = m_.triangles[t];
+      const Vec3 &a = m_.vertices[f[0]], &b = m_.vertices[f[1]], &c = m_.vertices[f[2]];
+      // Moller-Trumbore
+      const Vec3 e1 = b - a, e2 = c - a, h = dir.cross(e2);
+      const double det = e1.dot(h);
+      if (std::abs(det) < 1e-300) continue;
+      const Vec3 s = p - a;
+      const double u = s.dot(h) / det;
+      if (u < 0.0 || u > 1.0) continue;
+      const Vec3 q = s.cross(e1);
+      const double v = dir.dot(q) / det;
+      if (v < 0.0 || u + v > 1.0) continue;
+      if (e2.dot(q) / det > 0.0) ++count;
+    }
+    return count;
+  }
+
+ private:
+  const TriangleMesh& m_;
+  std::vector<Vec3> lo_, hi_;
+};
 
 }  // namespace
 
@@ -381,11 +448,43 @@ CheckReport check_packing(const Grains& grains, int dimension, const Container& 
   }
 
   std::vector<Vec3> normals;
+  const bool mesh = container.kind == ContainerKind::Mesh && container.mesh;
+  std::unique_ptr<MeshJudge> judge;
+  if (mesh) judge = std::make_unique<MeshJudge>(*container.mesh);
   for (std::size_t i = 0; i < n; ++i) {
     if (!valid[i]) continue;
     const Grain& gi = grains[i];
     normals.clear();
     bool outside = false;
+
+    if (mesh) {
+      // No floor: the triangles are the container (an open outlet has nothing under it).
+      for (std::size_t t = 0; t < judge->size(); ++t) {
+        if (!judge->near(t, gi.x, gi.r * (1 + 2 * contact_tol))) continue;
+        const Vec3 d = gi.x - judge->nearest(t, gi.x);
+        const double gap = d.norm() - gi.r, pen = -gap / gi.r;
+        rep.max_overlap = std::max(rep.max_overlap, pen);
+        if (pen > overlap_tol) {
+          ++rep.overlaps;
+          outside = true;
+        }
+        if (gap < contact_tol * gi.r && d.norm() > 0) normals.push_back(d / d.norm());
+      }
+      if (judge->crossings_below(gi.x) % 2 == 0) outside = true;
+      if (outside) {
+        ++rep.outside;
+        note(i);
+      }
+      for (std::uint32_t k = start[i]; k < start[i + 1]; ++k) {
+        const Vec3 d = gi.x - grains[partner[k]].x;
+        if (d.norm() > 0) normals.push_back(d / d.norm());
+      }
+      if (!balanced(normals, dimension)) {
+        ++rep.unsupported;
+        note(i);
+      }
+      continue;
+    }
 
     // Floor and walls.
     const double floor_gap = gi.x.z() - gi.r;

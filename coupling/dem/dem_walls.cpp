@@ -1,5 +1,8 @@
 #include "coupling/dem/dem_walls.h"
 
+#include "btr/placement/mesh_index.h"
+
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -7,6 +10,15 @@ namespace btr {
 
 double DemWall::distance(const Vec3& x) const {
   if (kind == Kind::Cylinder) return position - std::hypot(x.x(), x.y());
+  if (kind == Kind::Mesh) {
+    // Unsigned: a mesh has no inside to tell (an open mesh least of all); a grain is never beyond it.
+    // Triangles farther than `position` (a twentieth of the mesh's size) count as that far.
+    std::vector<int> near;
+    mesh->collect(x - Vec3::Constant(position), x + Vec3::Constant(position), near);
+    double d = position;
+    for (int t : near) d = std::min(d, mesh->distance(t, x));
+    return d;
+  }
   return inward * (x[axis] - position);
 }
 
@@ -67,6 +79,18 @@ std::vector<DemWall> dem_walls(const Container& c, int dimension) {
       w.kind = DemWall::Kind::Cylinder;
       w.name = "cylinder";
       w.position = c.radius;
+      walls.push_back(w);
+      break;
+    }
+    case ContainerKind::Mesh: {
+      if (dimension != 3) throw std::runtime_error("container 'mesh' exists in 3D only");
+      if (!c.mesh) throw std::runtime_error("container 'mesh' without its triangles");
+      DemWall w;
+      w.kind = DemWall::Kind::Mesh;
+      w.name = "mesh";
+      w.position = 0.05 * (c.mesh->hi - c.mesh->lo).norm();
+      w.triangles = c.mesh;
+      w.mesh = std::make_shared<const MeshIndex>(*c.mesh, w.position);
       walls.push_back(w);
       break;
     }

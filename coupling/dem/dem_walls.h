@@ -1,7 +1,9 @@
 #pragma once
 // The walls a DEM engine needs for a container (exactly those the container has: the floor, the
-// side walls of a box, the plates and end walls of a Hele-Shaw cell, a cylinder; none laterally
-// for open and periodic containers), with the geometry to measure a grain against each.
+// side walls of a box, the plates and end walls of a Hele-Shaw cell, a cylinder, a mesh container's
+// triangles; none laterally for open and periodic containers), with the geometry to measure a grain
+// against each.
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -10,13 +12,17 @@
 
 namespace btr {
 
+class MeshIndex;
+
 struct DemWall {
-  enum class Kind { Plane, Cylinder };
+  enum class Kind { Plane, Cylinder, Mesh };
   Kind kind = Kind::Plane;
   std::string name;     // "floor", "x-", "x+", "y-", "y+", "cylinder"
   int axis = 2;         // plane: 0, 1, 2 for x, y, z
   double position = 0;  // plane: coordinate along axis; cylinder: radius (axis = z through x = y = 0)
   int inward = 1;       // plane: +1 if the grains are on the side of larger coordinates
+  std::shared_ptr<const TriangleMesh> triangles;  // mesh: the container's triangles, as placed
+  std::shared_ptr<const MeshIndex> mesh;           // and their index (distance: to the nearest one)
 
   // Signed distance of a point from the wall, positive on the grains' side.
   double distance(const Vec3& x) const;

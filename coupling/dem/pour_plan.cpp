@@ -62,6 +62,11 @@ std::vector<Site> pour_sites(const Scene& scene, double r_max) {
   const double spacing = kPourSpacing * r_max;
   const double jitter = kPourJitter * spacing;
   const double margin = 1.01 * r_max + jitter;  // a jittered grain still clears every wall
+  // A mesh has no lattice of release sites written for it yet (its footprint is not a rectangle or disk).
+  if (c.kind == ContainerKind::Mesh)
+    refuse(scene, "container.kind",
+           "the reference pour does not support a mesh container yet (its release lattice covers boxes, "
+           "cylinders and open floors); relax a BTR packing of it with `btr relax` instead");
   std::vector<DemWall> walls;
   try {
     walls = dem_walls(c, dim);

@@ -1,8 +1,13 @@
 // Scene <-> JSON. Every field is written, so a later stage can rebuild the Scene from NAME.json alone.
 #include "coupling/io/scene_json.h"
 
+#include "btr/scene/mesh_file.h"
+#include "btr/scene/scene_toml.h"
+
 #include "btr/scene/scene_limits.h"
 
+#include <cmath>
+#include <filesystem>
 #include <initializer_list>
 #include <stdexcept>
 #include <string>
@@ -170,6 +175,11 @@ json scene_to_json(const Scene& s) {
   // Only drums have ends (3D); other containers' JSON is unchanged.
   if (s.container.kind == ContainerKind::Drum && s.dimension == 3)
     out["container"]["ends"] = s.container.periodic_ends ? "periodic" : "walls";
+  // A mesh: its file (as resolved against the scene's folder) and scale, read again with the packing.
+  if (s.container.kind == ContainerKind::Mesh && s.container.mesh) {
+    out["container"]["file"] = std::filesystem::absolute(s.container.mesh->file).lexically_normal().string();
+    out["container"]["scale"] = s.container.mesh->scale;
+  }
   if (s.intruder)
     out["intruder"] = {{"diameter_ratio", s.intruder->diameter_ratio},
                        {"x", s.intruder->x},
@@ -280,13 +290,15 @@ Scene scene_from_json(const json& j, const std::string& origin) {
     s.grains.components.push_back(c);
   }
 
-  const json& c = rd.object(j, "", "container", {"kind", "size_x", "size_y", "gap", "radius", "height", "ends"});
+  const json& c =
+      rd.object(j, "", "container", {"kind", "size_x", "size_y", "gap", "radius", "height", "ends", "file", "scale"});
   std::string kind = rd.string(c, "container", "kind");
   bool found = false;
   for (ContainerKind k : {ContainerKind::Open, ContainerKind::Box, ContainerKind::Periodic, ContainerKind::HeleShaw,
-                          ContainerKind::Cylinder, ContainerKind::Drum})
+                          ContainerKind::Cylinder, ContainerKind::Drum, ContainerKind::Mesh})
     if (kind == to_string(k)) s.container.kind = k, found = true;
-  if (!found) rd.fail("container.kind", "expected open, box, periodic, hele-shaw, cylinder or drum, got '" + kind + "'");
+  if (!found)
+    rd.fail("container.kind", "expected open, box, periodic, hele-shaw, cylinder, drum or mesh, got '" + kind + "'");
   s.container.size_x = rd.number(c, "container", "size_x");
   s.container.size_y = rd.number(c, "container", "size_y");
   s.container.gap = rd.number(c, "container", "gap");
@@ -298,6 +310,24 @@ Scene scene_from_json(const json& j, const std::string& origin) {
       rd.fail("container.ends", "expected \"walls\" or \"periodic\" in a drum container, got '" + ends + "' in a " +
                                     to_string(s.container.kind) + " container");
     s.container.periodic_ends = ends == "periodic";
+  }
+  if (s.container.kind == ContainerKind::Mesh) {
+    if (!c.contains("file")) rd.fail("container.file", "expected the mesh file of a mesh container");
+    const std::string file = rd.string(c, "container", "file");
+    const double scale = c.contains("scale") ? rd.number(c, "container", "scale") : 1.0;
+    try {
+      s.container.mesh = read_mesh(file, scale);
+    } catch (const SceneError& e) {
+      rd.fail("container.file", std::string("the packing's mesh cannot be read again: ") + e.what());
+    }
+    const Vec3 size = s.container.mesh->hi - s.container.mesh->lo;
+    if (std::abs(size.x() - s.container.size_x) > 1e-9 * size.norm() ||
+        std::abs(size.y() - s.container.size_y) > 1e-9 * size.norm())
+      rd.fail("container.file", file + ": the mesh changed since the packing was made (its bounding box is " +
+                                    std::to_string(size.x()) + " x " + std::to_string(size.y()) + ", the packing's " +
+                                    std::to_string(s.container.size_x) + " x " + std::to_string(s.container.size_y) + ")");
+  } else if (c.contains("file") || c.contains("scale")) {
+    rd.fail("container.file", "only a mesh container has a file and a scale");
   }
 
   const json& src =

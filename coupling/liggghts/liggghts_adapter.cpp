@@ -25,7 +25,7 @@ class LiggghtsAdapter : public EngineAdapter {
     return write_liggghts_inputs(packing, scene, plan, dir);
   }
 
-  EngineCommand command(const std::string&, const RelaxSettings& settings) const override {
+  EngineCommand command(const std::string& dir, const RelaxSettings& settings) const override {
     EngineCommand c;
     if (settings.np > 1) {
       // No binding of ranks to cores and yielding while waiting: on a machine whose cores are shared, a
@@ -37,7 +37,12 @@ class LiggghtsAdapter : public EngineAdapter {
         c.env["OMPI_ALLOW_RUN_AS_ROOT_CONFIRM"] = "1";
       }
     }
-    for (const char* a : {"liggghts", "-in", kLiggghtsScript, "-log", kLiggghtsLog, "-screen", "none", "-echo", "none"})
+    // LIGGGHTS 3.8's STL reader (fix mesh/surface) prints to the screen without checking that there is
+    // one: with "-screen none" it crashes. A mesh container's run (its inputs hold the mesh) gets a screen
+    // file instead.
+    const bool mesh = std::filesystem::exists(std::filesystem::path(dir) / kLiggghtsMesh);
+    for (const char* a : {"liggghts", "-in", kLiggghtsScript, "-log", kLiggghtsLog, "-screen", mesh ? kLiggghtsScreen : "none",
+                          "-echo", "none"})
       c.argv.push_back(a);
     return c;
   }

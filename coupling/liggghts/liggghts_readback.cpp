@@ -232,7 +232,11 @@ RelaxResult read_liggghts_result(const std::string& dir, const Packing& original
     for (const DemWall& w : walls) {
       const std::string f = "f_force_" + liggghts_wall_id(w.name);
       double fn;
-      if (w.kind == DemWall::Kind::Cylinder) {
+      if (w.kind == DemWall::Kind::Mesh) {  // the whole force of the mesh on the grain
+        fn = std::sqrt(std::pow(row[atoms.column(f + "[1]", final_path)], 2) +
+                       std::pow(row[atoms.column(f + "[2]", final_path)], 2) +
+                       std::pow(row[atoms.column(f + "[3]", final_path)], 2));
+      } else if (w.kind == DemWall::Kind::Cylinder) {
         const double fx = row[atoms.column(f + "[1]", final_path)], fy = row[atoms.column(f + "[2]", final_path)];
         const double rho = std::hypot(g.x.x(), g.x.y());
         fn = rho > 0 ? std::abs(fx * g.x.x() + fy * g.x.y()) / rho : std::hypot(fx, fy);

@@ -20,6 +20,7 @@
 #include "coupling/dem/relax_target.h"
 #include "coupling/dem/timestep.h"
 #include "coupling/io/atomic_file.h"
+#include "coupling/io/mesh_stl.h"
 #include "coupling/liggghts/liggghts_compaction.h"
 
 namespace btr {
@@ -72,6 +73,11 @@ SimulationBox make_box(const Grains& grains, int dimension, const Container& c, 
       set(0, -c.radius, c.radius);
       set(1, -c.radius, c.radius);
       break;
+    case ContainerKind::Mesh:  // its bounding box, a hair wider so that no mesh node lies on a boundary
+      bx = "f", by = "f";
+      set(0, -0.5 * c.size_x * (1 + 1e-6), 0.5 * c.size_x * (1 + 1e-6));
+      set(1, -0.5 * c.size_y * (1 + 1e-6), 0.5 * c.size_y * (1 + 1e-6));
+      break;
     case ContainerKind::Drum:  // refused by dem_walls() before any script is written
       bx = "f", by = "f";
       set(0, -c.radius, c.radius);
@@ -85,6 +91,8 @@ SimulationBox make_box(const Grains& grains, int dimension, const Container& c, 
   // The floor is the lower boundary; the top is shrink-wrapped (grains may rise) from a start above
   // the highest grain.
   set(2, 0.0, hi[2] + 2.0 * r_max);
+  // A mesh's nodes must lie inside the box (LIGGGHTS refuses a mesh that leaves it).
+  if (c.kind == ContainerKind::Mesh) set(2, -1e-6 * c.mesh->hi.z(), std::max(b.hi[2], c.mesh->hi.z() * (1 + 1e-6)));
   b.boundary = bx + " " + by + " fm";
   return b;
 }
@@ -145,6 +153,7 @@ std::string wall_geometry(const DemWall& w) {
 std::vector<std::string> wall_force_columns(const DemWall& w) {
   const std::string f = "f_force_" + liggghts_wall_id(w.name);
   if (w.kind == DemWall::Kind::Cylinder) return {f + "[1]", f + "[2]"};
+  if (w.kind == DemWall::Kind::Mesh) return {f + "[1]", f + "[2]", f + "[3]"};
   return {f + "[" + std::to_string(w.axis + 1) + "]"};
 }
 
@@ -416,9 +425,21 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
     << "timestep        " << g17(plan.timestep) << "\n\n";
 
   s << "# Walls: exactly the container's.\n";
-  for (const DemWall& w : walls)
+  namespace fs = std::filesystem;
+  std::vector<std::string> written;
+  for (const DemWall& w : walls) {
+    if (w.kind == DemWall::Kind::Mesh) {
+      // The mesh as placed (scaled and shifted like the packing), beside this script.
+      write_mesh_stl(*w.triangles, (fs::path(dir) / kLiggghtsMesh).string());
+      written.push_back((fs::path(dir) / kLiggghtsMesh).string());
+      s << "fix btr_mesh all mesh/surface file " << kLiggghtsMesh << " type " << types.wall_type << "\n"
+        << "fix " << liggghts_wall_id(w.name) << " all wall/gran " << models
+        << " mesh n_meshes 1 meshes btr_mesh store_force yes\n";
+      continue;
+    }
     s << "fix " << liggghts_wall_id(w.name) << " all wall/gran " << models << " primitive type " << types.wall_type
       << " " << wall_geometry(w) << " store_force yes\n";
+  }
   s << "fix btr_gravity all gravity " << g17(kGravity) << " vector 0.0 0.0 -1.0\n";
   if (compaction.enabled && compaction.damping > 0)
     s << liggghts_viscous_fix(kCompactionDampingFix, grains, scene, compaction.damping);
@@ -550,12 +571,12 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
     << " c_btr_pairs[1] c_btr_pairs[2] c_btr_pairs[3] c_btr_pairs[7] c_btr_pairs[8] c_btr_pairs[9] c_btr_pairs[10]"
     << " modify format \"%.0f %.0f %.0f %.17g %.17g %.17g %.17g\"\n";
 
-  namespace fs = std::filesystem;
   const std::string data_path = (fs::path(dir) / kLiggghtsData).string();
   const std::string script_path = (fs::path(dir) / kLiggghtsScript).string();
   write_text_file(data_path, data_file(packing, scene, box, n_types));
   write_text_file(script_path, s.str());
-  return {script_path, data_path};
+  written.insert(written.begin(), {script_path, data_path});
+  return written;
 }
 
 }  // namespace btr

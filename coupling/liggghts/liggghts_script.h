@@ -22,6 +22,8 @@ namespace btr {
 
 inline constexpr const char* kLiggghtsScript = "in.btr";
 inline constexpr const char* kLiggghtsData = "btr.data";
+inline constexpr const char* kLiggghtsMesh = "btr_mesh.stl";  // a mesh container's triangles, as placed
+inline constexpr const char* kLiggghtsScreen = "screen.liggghts";  // a mesh container's run: LIGGGHTS' screen
 inline constexpr const char* kLiggghtsLog = "log.liggghts";  // also LIGGGHTS' default log name
 inline constexpr const char* kLiggghtsFinalDump = "btr_final.dump";
 inline constexpr const char* kLiggghtsContactsDump = "btr_contacts.dump";
@@ -42,7 +44,7 @@ std::string liggghts_friction_fixes(const Scene& scene, double scale = 1.0);
 // "fix ID all viscous ..." (with its comment): the damping `damping` as liggghts_damping_gamma computes it.
 std::string liggghts_viscous_fix(const std::string& id, const Grains& grains, const Scene& scene, double damping);
 
-// Writes dir/btr.data and dir/in.btr; returns their paths.
+// Writes dir/btr.data and dir/in.btr, and for a mesh container dir/btr_mesh.stl; returns their paths.
 std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Scene& scene, const RelaxPlan& plan,
                                                const std::string& dir);
 

@@ -12,6 +12,7 @@
 
 #include "btr/verify/cluster_unwrap.h"
 #include "coupling/io/atomic_file.h"
+#include "coupling/io/mesh_stl.h"
 #include "coupling/yade/yade_script.h"
 
 namespace btr {
@@ -53,7 +54,12 @@ class YadeAdapter : public EngineAdapter {
     write_text_file((d / yade_files::kScript).string(), script);
     fs::permissions(d / yade_files::kScript, fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec,
                     fs::perm_options::add);
-    return {(d / yade_files::kScript).string(), (d / yade_files::kPacking).string()};
+    std::vector<std::string> written{(d / yade_files::kScript).string(), (d / yade_files::kPacking).string()};
+    if (scene.container.kind == ContainerKind::Mesh) {
+      write_mesh_stl(*scene.container.mesh, (d / yade_files::kMesh).string());
+      written.push_back((d / yade_files::kMesh).string());
+    }
+    return written;
   }
 
   EngineCommand command(const std::string& dir, const RelaxSettings& settings) const override {

@@ -211,6 +211,16 @@ def add_cylinder(radius, height, segments):
     _walls.extend(O.bodies.append(facets))
 
 
+def add_mesh(stl_name):
+    """A mesh container's triangles as fixed facets (ymport.stl), from the ASCII STL file btr wrote beside
+    this script in the packing's coordinates (scaled and placed as the scene says: no scale or shift here)."""
+    from yade import ymport
+    facets = ymport.stl(path(stl_name), material=_materials["walls"], color=(0.5, 0.5, 0.5))
+    if not facets:
+        raise RunFailure("the mesh file %s has no facets" % stl_name)
+    _walls.extend(O.bodies.append(facets))
+
+
 def friction_angles(scale):
     """The Ip2 functors' friction angles of every material pair, friction scaled by `scale`."""
     return MatchMaker(matches=[(a, b, math.atan(mu * scale)) for a, b, _, mu in _pairs])

@@ -347,6 +347,9 @@ std::string yade_script(const Packing& packing, const Scene& scene, const RelaxP
   for (const DemWall& w : walls) {
     if (w.kind == DemWall::Kind::Plane) {
       out << "    add_plane(axis=" << w.axis << ", position=" << num(w.position) << ")  # " << w.name << "\n";
+    } else if (w.kind == DemWall::Kind::Mesh) {
+      out << "    add_mesh(" << py_string(yade_files::kMesh) << ")  # the container's " << w.triangles->triangles.size()
+          << " triangles, from " << py_string(w.triangles->file) << "\n";
     } else {
       const double height = box.height > 0 ? box.height : 2.0 * st.top;
       out << "    add_cylinder(radius=" << num(w.position) << ", height=" << num(height)

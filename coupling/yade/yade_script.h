@@ -13,6 +13,7 @@ namespace btr {
 namespace yade_files {
 constexpr const char* kScript = "relax_yade.py";      // generated batch script
 constexpr const char* kPacking = "yade_packing.csv";  // input: id,x,y,z,radius,species
+constexpr const char* kMesh = "btr_mesh.stl";          // input (mesh container): its triangles, as placed
 constexpr const char* kStatus = "yade_status.json";   // written last: status, stop reason, time, steps
 constexpr const char* kFinal = "yade_final.csv";      // id,x,y,z,vx,vy,vz
 constexpr const char* kKinetic = "yade_kinetic.csv";  // time,kinetic_energy

@@ -194,7 +194,7 @@ TEST(SceneInputs, MixtureAndListScenesAreReadAsWritten) {
 TEST_F(SceneFile, UnknownKeyNamesFileLineAndAllowedKeys) {
   const std::string text = replace(kBase, "size = [0.02, 0.02]", "sise = [0.02, 0.02]");
   EXPECT_EQ(error_of(text),
-            at(text, "sise") + "unknown key 'sise' in [container]; allowed: kind, size, gap, radius, height, length, ends");
+            at(text, "sise") + "unknown key 'sise' in [container]; allowed: kind, size, gap, radius, height, length, ends, file, scale");
 }
 
 TEST_F(SceneFile, UnknownKeyInsideAnInlineTable) {

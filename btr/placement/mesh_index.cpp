@@ -1,0 +1,166 @@
+#include "btr/placement/mesh_index.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <sstream>
+
+namespace btr {
+
+MeshIndex::MeshIndex(const TriangleMesh& mesh, double cell) : mesh_(mesh) {
+  const auto& V = mesh.vertices;
+  const std::size_t n = mesh.triangles.size();
+  box_lo_.resize(n), box_hi_.resize(n);
+  std::map<std::pair<int, int>, int> edge_use;
+  for (std::size_t t = 0; t < n; ++t) {
+    const auto& f = mesh.triangles[t];
+    box_lo_[t] = V[f[0]].cwiseMin(V[f[1]]).cwiseMin(V[f[2]]);
+    box_hi_[t] = V[f[0]].cwiseMax(V[f[1]]).cwiseMax(V[f[2]]);
+    for (int k = 0; k < 3; ++k) {
+      const int a = f[k], b = f[(k + 1) % 3];
+      ++edge_use[{std::min(a, b), std::max(a, b)}];
+    }
+  }
+  for (const auto& [e, uses] : edge_use)
+    if (uses == 1) rim_.push_back({e.first, e.second});
+  // Columns about the nominal width, at most 512 along each side (a large mesh with small grains).
+  const double lx = mesh.hi.x() - mesh.lo.x(), ly = mesh.hi.y() - mesh.lo.y();
+  w_ = std::max({cell, lx / 512.0, ly / 512.0});
+  x0_ = mesh.lo.x(), y0_ = mesh.lo.y();
+  nx_ = std::max(1L, static_cast<long>(std::ceil(lx / w_)));
+  ny_ = std::max(1L, static_cast<long>(std::ceil(ly / w_)));
+  columns_.resize(static_cast<std::size_t>(nx_ * ny_));
+  for (std::size_t t = 0; t < n; ++t)
+    for (long j = iy(box_lo_[t].y()); j <= iy(box_hi_[t].y()); ++j)
+      for (long i = ix(box_lo_[t].x()); i <= ix(box_hi_[t].x()); ++i)
+        columns_[static_cast<std::size_t>(i + nx_ * j)].push_back(static_cast<int>(t));
+  stamp_.assign(n, 0u);
+}
+
+long MeshIndex::ix(double x) const { return std::clamp(static_cast<long>(std::floor((x - x0_) / w_)), 0L, nx_ - 1); }
+long MeshIndex::iy(double y) const { return std::clamp(static_cast<long>(std::floor((y - y0_) / w_)), 0L, ny_ - 1); }
+
+const std::vector<int>& MeshIndex::column(double x, double y) const {
+  return columns_[static_cast<std::size_t>(ix(x) + nx_ * iy(y))];
+}
+
+// Ericson, Real-Time Collision Detection, 5.1.5: by the Voronoi regions of the vertices, edges and face.
+Vec3 MeshIndex::closest(int t, const Vec3& p) const {
+  const auto& f = mesh_.triangles[static_cast<std::size_t>(t)];
+  const Vec3& a = mesh_.vertices[f[0]];
+  const Vec3& b = mesh_.vertices[f[1]];
+  const Vec3& c = mesh_.vertices[f[2]];
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return a;
+  const Vec3 bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0.0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return a + (d1 / (d1 - d3)) * ab;
+  const Vec3 cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0.0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return a + (d2 / (d2 - d6)) * ac;
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
+  const double denom = 1.0 / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+void MeshIndex::collect(const Vec3& lo, const Vec3& hi, std::vector<int>& out) const {
+  if (hi.x() < mesh_.lo.x() || lo.x() > mesh_.hi.x() || hi.y() < mesh_.lo.y() || lo.y() > mesh_.hi.y()) return;
+  if (++visit_ == 0) std::fill(stamp_.begin(), stamp_.end(), 0u), visit_ = 1;
+  const std::size_t first = out.size();
+  for (long j = iy(lo.y()); j <= iy(hi.y()); ++j)
+    for (long i = ix(lo.x()); i <= ix(hi.x()); ++i)
+      for (int t : columns_[static_cast<std::size_t>(i + nx_ * j)]) {
+        if (stamp_[static_cast<std::size_t>(t)] == visit_) continue;
+        stamp_[static_cast<std::size_t>(t)] = visit_;
+        const Vec3& bl = box_lo_[static_cast<std::size_t>(t)];
+        const Vec3& bh = box_hi_[static_cast<std::size_t>(t)];
+        if ((bl.array() <= hi.array()).all() && (bh.array() >= lo.array()).all()) out.push_back(t);
+      }
+  std::sort(out.begin() + static_cast<long>(first), out.end());
+}
+
+double MeshIndex::fall_contact(int t, const Vec3& x, double r) const {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const Vec3& bl = box_lo_[static_cast<std::size_t>(t)];
+  const Vec3& bh = box_hi_[static_cast<std::size_t>(t)];
+  if (x.x() < bl.x() - r || x.x() > bh.x() + r || x.y() < bl.y() - r || x.y() > bh.y() + r) return nan;
+  if (bl.z() - r > x.z()) return nan;
+  // The distance along the line is convex in z: its minimum by golden section on [z_lo, z0], then the
+  // highest height at distance r above the minimum by bisection.
+  auto f = [&](double z) { return distance(t, Vec3(x.x(), x.y(), z)); };
+  const double z0 = x.z();
+  double lo = std::min(bl.z() - 2.0 * r, z0), hi = z0;
+  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+  double a = hi - g * (hi - lo), b = lo + g * (hi - lo), fa = f(a), fb = f(b);
+  for (int it = 0; it < 120 && hi - lo > 1e-15 * r; ++it) {
+    if (fa < fb) hi = b, b = a, fb = fa, a = hi - g * (hi - lo), fa = f(a);
+    else lo = a, a = b, fa = fb, b = lo + g * (hi - lo), fb = f(b);
+  }
+  const double z_min = 0.5 * (lo + hi);
+  if (f(z_min) > r * (1.0 - 1e-10)) return nan;  // passes beside it, or grazes it (sliding down a vertical wall)
+  if (z_min >= z0 - 1e-12 * r) return nan;   // the line moves away from it (or along it) from here down
+  if (f(z0) <= r) return z0;                 // touching at the start and moving in
+  double in = z_min, out = z0;               // f(in) <= r < f(out)
+  for (int it = 0; it < 200 && out - in > 1e-16 * std::max(1.0, std::abs(out)); ++it) {
+    const double m = 0.5 * (in + out);
+    (f(m) <= r ? in : out) = m;
+  }
+  return in;
+}
+
+int MeshIndex::crossings_below(double x, double y, double z) const {
+  // A fixed irrational nudge of the line keeps it off shared edges and vertices, so every crossing
+  // counts once (a line through an edge would otherwise meet both triangles or neither).
+  const double scale = std::max(mesh_.hi.x() - mesh_.lo.x(), mesh_.hi.y() - mesh_.lo.y());
+  const double px = x + 0.7548776662466927e-9 * scale, py = y + 0.5698402909980532e-9 * scale;
+  int count = 0;
+  const auto& V = mesh_.vertices;
+  for (int t : column(px, py)) {
+    const auto& f = mesh_.triangles[static_cast<std::size_t>(t)];
+    const Vec3 &a = V[f[0]], &b = V[f[1]], &c = V[f[2]];
+    auto orient = [&](const Vec3& p, const Vec3& q) { return (q.x() - p.x()) * (py - p.y()) - (q.y() - p.y()) * (px - p.x()); };
+    const double o1 = orient(a, b), o2 = orient(b, c), o3 = orient(c, a);
+    const bool inside = (o1 > 0 && o2 > 0 && o3 > 0) || (o1 < 0 && o2 < 0 && o3 < 0);
+    if (!inside) continue;
+    const Vec3 n = (b - a).cross(c - a);
+    if (n.z() == 0.0) continue;
+    const double zc = a.z() - (n.x() * (px - a.x()) + n.y() * (py - a.y())) / n.z();
+    if (zc < z) ++count;
+  }
+  return count;
+}
+
+std::string MeshIndex::footprint_misfit(double x, double y, double r) const {
+  const int n = crossings_below(x, y, std::numeric_limits<double>::infinity());
+  std::ostringstream why;
+  if (n % 2 == 0) {
+    why << "(x, y) = (" << x << ", " << y << ") is outside the footprint of the mesh " << mesh_.file << ": the vertical "
+        << "line there crosses it " << n << " times (" << (n == 0 ? "outside its rim, or over an open outlet" : "it is closed above there")
+        << "), a grain dropped there would fall past it or land outside it";
+    return why.str();
+  }
+  const auto& V = mesh_.vertices;
+  for (const auto& e : rim_) {
+    const Vec3 &a = V[e[0]], &b = V[e[1]];
+    const double ex = b.x() - a.x(), ey = b.y() - a.y(), len2 = ex * ex + ey * ey;
+    const double s = len2 > 0.0 ? std::clamp(((x - a.x()) * ex + (y - a.y()) * ey) / len2, 0.0, 1.0) : 0.0;
+    const double dx = x - a.x() - s * ex, dy = y - a.y() - s * ey;
+    if (dx * dx + dy * dy < r * r) {
+      why << "(x, y) = (" << x << ", " << y << ") puts a grain of radius " << r << " over the open rim of the mesh "
+          << mesh_.file << " (an edge of one triangle only, from (" << a.x() << ", " << a.y() << ", " << a.z() << ") to ("
+          << b.x() << ", " << b.y() << ", " << b.z() << ")): it could land on the rim or outside it";
+      return why.str();
+    }
+  }
+  return {};
+}
+
+}  // namespace btr

@@ -1,0 +1,54 @@
+#pragma once
+// The triangles of a mesh container for the placement: a grid of columns holding each triangle by its
+// bounding box (the mesh never moves, so it is indexed once, apart from the grains' NeighbourGrid), the
+// closest point of a triangle, and the mesh's footprint: where a grain dropped from above lands inside.
+#include <string>
+#include <vector>
+
+#include "btr/model/mesh.h"
+
+namespace btr {
+
+class MeshIndex {
+ public:
+  // `cell`: the nominal column width (the neighbour grid's, two largest radii).
+  MeshIndex(const TriangleMesh& mesh, double cell);
+
+  const TriangleMesh& mesh() const { return mesh_; }
+  int size() const { return static_cast<int>(mesh_.triangles.size()); }
+
+  // The point of triangle t closest to x.
+  Vec3 closest(int t, const Vec3& x) const;
+  double distance(int t, const Vec3& x) const { return (x - closest(t, x)).norm(); }
+
+  // Every triangle whose bounding box meets the box [lo, hi], once each, in increasing index (appended).
+  void collect(const Vec3& lo, const Vec3& hi, std::vector<int>& out) const;
+
+  // The highest centre height z <= x.z at which a sphere of radius r on the vertical line through x
+  // touches triangle t while moving down into it; NaN when it does not (passes beside it, or moves away).
+  double fall_contact(int t, const Vec3& x, double r) const;
+
+  // How many triangles the vertical line through (x, y) crosses below height z (odd: inside a cup).
+  int crossings_below(double x, double y, double z) const;
+
+  // Empty when a grain of radius r dropped at (x, y) from above the mesh falls into it: the vertical line
+  // crosses the mesh an odd number of times, and no open rim (an edge of one triangle only) lies within r
+  // of it horizontally. Otherwise why not, naming the file.
+  std::string footprint_misfit(double x, double y, double r) const;
+
+ private:
+  const std::vector<int>& column(double x, double y) const;
+  long ix(double x) const;
+  long iy(double y) const;
+
+  const TriangleMesh& mesh_;
+  std::vector<Vec3> box_lo_, box_hi_;  // each triangle's bounding box
+  std::vector<std::array<int, 2>> rim_;  // edges of one triangle only (an open mesh's rims and outlets)
+  double x0_, y0_, w_;
+  long nx_, ny_;
+  std::vector<std::vector<int>> columns_;
+  mutable std::vector<unsigned> stamp_;  // collect(): a triangle already taken in this call
+  mutable unsigned visit_ = 0;
+};
+
+}  // namespace btr

@@ -1,0 +1,351 @@
+// The placement of one grain in a mesh container (docs/design.md, "Mesh containers"). The state is the
+// centre x and its active contacts, as in btr/placement/deposition.cpp; each event asks where gravity
+// pushes the grain (descend) and moves it:
+//   no contact     a vertical fall, solved exactly against grains and triangles;
+//   one or two     along the set of positions keeping those contacts, in steps of at most r/10 (each
+//                  projected back onto the contacts, so the path lies exactly on them: a meridian of a
+//                  grain or vertex sphere, a line on a face, the circle or curve of two contacts), an event
+//                  inside a step located by bisection: a new contact, a support lifting off;
+//   balanced       at rest on three supports, on a horizontal face, at the lowest point of a two-support
+//                  curve; on a top (a grain, a vertex, an edge) it rolls off in a direction fixed by a hash.
+// A triangle met where another active triangle already touches the grain at the same point (rolling
+// over their shared edge or vertex) takes that triangle's place instead of adding a second contact.
+#include "btr/placement/mesh_placement.h"
+
+#include <Eigen/Dense>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <vector>
+
+#include "btr/placement/deposition.h"
+#include "btr/placement/descent.h"
+#include "btr/placement/mesh_index.h"
+#include "btr/placement/neighbour_grid.h"
+#include "btr/placement/obstacle.h"
+
+namespace btr {
+namespace {
+
+// A contact partner: a fixed grain (one periodic image) or a triangle.
+struct Partner {
+  std::int64_t key = 0;  // sphere_key for grains, -1000 - t for triangle t
+  int tri = -1;
+  Vec3 c = Vec3::Zero();  // grain: centre
+  double R = 0.0;         // grain: contact distance r + r_j
+};
+
+std::uint64_t mix(std::uint64_t z) {
+  z += 0x9e3779b97f4a7c15ULL;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+struct Walker {
+  const MeshEngine& e;
+  std::int64_t id;
+  double r;
+  std::vector<Partner> active;
+  std::vector<Partner> near;  // candidates gathered about `gathered_at`
+  Vec3 gathered_at = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
+  std::vector<int> tris;
+  std::vector<Partner> entering;  // the partners a blocked step enters at its end
+
+  double gap(const Partner& p, const Vec3& x) const {
+    return p.tri >= 0 ? e.mesh.distance(p.tri, x) - r : (x - p.c).norm() - p.R;
+  }
+  Vec3 normal(const Partner& p, const Vec3& x) const {
+    return p.tri >= 0 ? (x - e.mesh.closest(p.tri, x)).normalized() : (x - p.c).normalized();
+  }
+  bool has(std::int64_t key) const {
+    for (const Partner& p : active)
+      if (p.key == key) return true;
+    return false;
+  }
+  [[noreturn]] void fail(const std::string& what, const Vec3& x) const {
+    std::ostringstream why;
+    why << what << " at (" << x.x() << ", " << x.y() << ", " << x.z() << ") in the mesh " << e.mesh.mesh().file;
+    throw PlacementError(id, why.str());
+  }
+
+  // Adds a partner met at x; a triangle touching the grain where an active triangle does (their shared
+  // edge or vertex, up to 1e-7 r) replaces it.
+  void add(const Partner& p, const Vec3& x) {
+    if (has(p.key)) return;
+    if (p.tri >= 0) {
+      const Vec3 q = e.mesh.closest(p.tri, x);
+      for (Partner& a : active)
+        if (a.tri >= 0 && (e.mesh.closest(a.tri, x) - q).norm() <= 1e-7 * r) {
+          a = p;
+          return;
+        }
+    }
+    if (static_cast<int>(active.size()) >= kMaxContacts) {
+      std::ostringstream why;
+      why << "more than " << kMaxContacts << " simultaneous contacts";
+      fail(why.str(), x);
+    }
+    active.push_back(p);
+  }
+
+  // Candidates for a path within r/2 of x: grains whose contact sphere and triangles whose offset surface
+  // may reach it.
+  void gather(const Vec3& x) {
+    near.clear();
+    const Vec3 reach = Vec3::Constant(2.0 * r + e.r_max);
+    e.grid.visit_box(x - reach, x + reach, [&](std::int32_t i, const Vec3& c, double radius, int image) {
+      Partner p;
+      p.key = sphere_key(i, image), p.c = c, p.R = r + radius;
+      near.push_back(p);
+    });
+    tris.clear();
+    e.mesh.collect(x - Vec3::Constant(2.0 * r), x + Vec3::Constant(2.0 * r), tris);
+    for (int t : tris) {
+      Partner p;
+      p.key = -1000 - static_cast<std::int64_t>(t), p.tri = t;
+      near.push_back(p);
+    }
+    gathered_at = x;
+  }
+
+  // x moved back onto every active contact (Newton steps on their gaps, one or two contacts: a grain on
+  // three is at rest); false when it does not converge.
+  bool project(Vec3& x) const {
+    const std::size_t k = active.size();
+    if (k == 0 || k > 2) return k == 0;
+    // 1e-14 r, or a few ulps of the coordinates where they are large against r (a big container)
+    const double eps = 1e-14 * r + 1e-15 * x.cwiseAbs().maxCoeff();
+    for (int it = 0; it < 40; ++it) {
+      const double g0 = gap(active[0], x);
+      const Vec3 n0 = normal(active[0], x);
+      if (k == 1) {
+        if (std::abs(g0) <= eps) return x.allFinite();
+        x -= g0 * n0;
+        continue;
+      }
+      const double g1 = gap(active[1], x);
+      const Vec3 n1 = normal(active[1], x);
+      if (std::max(std::abs(g0), std::abs(g1)) <= eps) return x.allFinite();
+      // x -= N (N^T N)^-1 g with N = [n0 n1]
+      const double c = n0.dot(n1), det = 1.0 - c * c;
+      if (!(det > 1e-12)) return false;
+      const double l0 = (g0 - c * g1) / det, l1 = (g1 - c * g0) / det;
+      x -= l0 * n0 + l1 * n1;
+    }
+    return false;
+  }
+
+  Descent descent_at(const Vec3& x) const {
+    Vec3 n[kMaxContacts];
+    for (std::size_t i = 0; i < active.size(); ++i) n[i] = normal(active[i], x);
+    return descend(n, active.size());
+  }
+
+  // What a grain that cannot move on holds: its contacts (grain or triangle, with their normals).
+  std::string stuck(const char* what, const Vec3& x, const Vec3& d) const {
+    std::ostringstream s;
+    s << what << " (direction " << d.x() << ", " << d.y() << ", " << d.z() << "; contacts:";
+    for (const Partner& p : active) {
+      const Vec3 n = normal(p, x);
+      s << " " << (p.tri >= 0 ? "triangle " + std::to_string(p.tri) : "grain " + std::to_string((p.key >> 30) + 1))
+        << " normal (" << n.x() << ", " << n.y() << ", " << n.z() << ")";
+    }
+    s << ")";
+    return s.str();
+  }
+  void fall(Vec3& x);
+  bool roll_off_top(const Vec3& x, Vec3& d, std::uint64_t salt) const;
+  Vec3 place(Vec3 x);
+};
+
+// Straight down to the highest contact below, exactly: z_j + sqrt((r + r_j)^2 - h^2) for a grain, the
+// first height at distance r from a triangle (MeshIndex::fall_contact).
+void Walker::fall(Vec3& x) {
+  const double tol = 1e-12 * r;
+  double best = -std::numeric_limits<double>::infinity();
+  std::vector<Partner> hits;
+  auto offer = [&](double z, const Partner& p) {
+    if (z > best + tol) {
+      best = z;
+      hits.clear();
+    }
+    if (z >= best - tol) hits.push_back(p);
+  };
+  const double reach = r + e.r_max;
+  e.grid.visit_column_down(
+      x.x(), x.y(), reach, x.z() + reach, [&](double layer_top) { return layer_top + reach > best; },
+      [&](std::int32_t i, const Vec3& c, double radius, int image) {
+        const double R = r + radius;
+        const double dx = x.x() - c.x(), dy = x.y() - c.y();
+        const double s = R * R - dx * dx - dy * dy;
+        if (s <= 1e-12 * R * R) return;
+        const double z_hit = c.z() + std::sqrt(s);
+        if (z_hit > x.z() + tol) return;
+        Partner p;
+        p.key = sphere_key(i, image), p.c = c, p.R = R;
+        offer(z_hit, p);
+      });
+  tris.clear();
+  e.mesh.collect(Vec3(x.x() - r, x.y() - r, -std::numeric_limits<double>::infinity()), Vec3(x.x() + r, x.y() + r, x.z() + r),
+                 tris);
+  for (int t : tris) {
+    const double z_hit = e.mesh.fall_contact(t, x, r);
+    if (std::isnan(z_hit)) continue;
+    Partner p;
+    p.key = -1000 - static_cast<std::int64_t>(t), p.tri = t;
+    offer(z_hit, p);
+  }
+  if (hits.empty())
+    fail("falls out of the mesh: no triangle or grain below it (an open outlet, or over its rim)", x);
+  x.z() = best;
+  for (const Partner& p : hits) add(p, x);
+}
+
+// Balanced on a top (a grain, a vertex, an edge, the top of a two-support curve): the first of a few
+// directions, fixed by a hash of the grain, along which a small move keeping the contacts goes down.
+// None (a horizontal face, the bottom of a curve): false, the grain is at rest.
+bool Walker::roll_off_top(const Vec3& x, Vec3& d, std::uint64_t salt) const {
+  const std::uint64_t h = mix(salt);
+  Vec3 dirs[4];
+  int n = 0;
+  if (active.size() == 1) {
+    const double angle = static_cast<double>(h >> 11) * 0x1.0p-53 * 2.0 * M_PI;
+    const Vec3 u(std::cos(angle), std::sin(angle), 0.0), v(-u.y(), u.x(), 0.0);
+    dirs[n++] = u, dirs[n++] = -u, dirs[n++] = v, dirs[n++] = -v;
+  } else if (active.size() == 2) {
+    Vec3 t = normal(active[0], x).cross(normal(active[1], x));
+    if (t.norm() < 1e-12) return false;
+    t.normalize();
+    if (h & 1) t = -t;
+    dirs[n++] = t, dirs[n++] = -t;
+  }
+  const double delta = 1e-5 * r;
+  for (int k = 0; k < n; ++k) {
+    Vec3 y = x + delta * dirs[k];
+    if (!project(y)) continue;
+    if (y.z() < x.z() - 1e-9 * delta) {
+      d = dirs[k];
+      return true;
+    }
+  }
+  return false;
+}
+
+Vec3 Walker::place(Vec3 x) {
+  const double tol = 1e-10 * r;  // a gap below -tol is an entry into a partner
+  const double h_max = 0.1 * r;
+  double h = h_max;
+  const long budget = static_cast<long>(e.max_events) * 100L;
+  for (long step = 0; step < budget; ++step) {
+    // Release the contacts that carry nothing.
+    const Descent desc = descent_at(x);
+    std::vector<Partner> loaded;
+    for (std::size_t i = 0; i < active.size(); ++i)
+      if (desc.loaded[i]) loaded.push_back(active[i]);
+    active.swap(loaded);
+    if (active.size() >= 3) return x;
+    Vec3 d = desc.direction;
+    if (active.empty()) {
+      fall(x);
+      h = h_max;
+      continue;
+    }
+    if (d.norm() < 1e-12) {
+      if (!roll_off_top(x, d, static_cast<std::uint64_t>(id) * 1315423911ULL + static_cast<std::uint64_t>(step)))
+        return x;
+    }
+    d.normalize();
+    if (!(gathered_at.allFinite()) || (x - gathered_at).norm() > 0.5 * r) gather(x);
+    Vec3 y = x + h * d;
+    if (!project(y) || !(y.z() < x.z()) || (y - x).norm() > 2.0 * h) {
+      // Past the lowest point of the path, or off a curve that turns within the step: a shorter step.
+      h *= 0.5;
+      if (h < 1e-10 * r) {
+        if (active.size() == 2) return x;  // the lowest point of the two contacts' curve
+        fail(stuck("cannot go down along its contacts", x, d), x);
+      }
+      continue;
+    }
+    // The first point of the step where a partner is entered (1), a support unloads (2) or the contacts
+    // cannot be kept (3). Inside a blocked step only the partners entered at its end are watched (one
+    // entered and left again within a step of r/10 would be a graze of depth ~1e-3 r at most).
+    const std::vector<Partner>* watched = &near;
+    auto blocked = [&](double s, Vec3& p) {
+      p = x + s * h * d;
+      if (!project(p)) return 3;
+      for (const Partner& q : *watched)
+        if (!has(q.key) && gap(q, p) < -tol) return 1;
+      const Descent dd = descent_at(p);
+      for (std::size_t i = 0; i < active.size(); ++i)
+        if (!dd.loaded[i]) return 2;
+      return 0;
+    };
+    Vec3 p1;
+    int why = blocked(1.0, p1);
+    if (why == 0) {
+      x = p1;
+      h = std::min(h_max, 2.0 * h);
+      continue;
+    }
+    entering.clear();
+    if (why == 1)
+      for (const Partner& q : near)
+        if (!has(q.key) && gap(q, p1) < -tol) entering.push_back(q);
+    watched = &entering;
+    double s0 = 0.0, s1 = 1.0;
+    Vec3 p0 = x;
+    auto bisect = [&] {
+      for (int it = 0; it < 60; ++it) {
+        const double sm = 0.5 * (s0 + s1);
+        Vec3 pm;
+        const int w = blocked(sm, pm);
+        if (w) s1 = sm, p1 = pm, why = w;
+        else s0 = sm, p0 = pm;
+      }
+    };
+    bisect();
+    // A partner the step only grazed (entered and left before its end) may hold the point found: then
+    // again, watching every partner near, so the grain stops where it first meets one.
+    bool grazed = false;
+    for (const Partner& q : near) grazed |= !has(q.key) && gap(q, p0) < -tol;
+    if (grazed) {
+      watched = &near;
+      s0 = 0.0, s1 = 1.0, p0 = x;
+      why = blocked(1.0, p1);
+      bisect();
+    }
+    x = p0;
+    if (why == 1) {
+      // The partners entered join (or replace a triangle touching at the same point).
+      for (const Partner& q : *watched)
+        if (!has(q.key) && gap(q, p1) < -tol) add(q, x);
+    } else if (why == 2) {
+      x = p1;  // just past the lift-off: the next descent releases the support
+    } else {
+      h *= 0.5;
+      if (h < 1e-10 * r) fail(stuck("cannot keep its contacts along its path", x, d), x);
+      continue;
+    }
+    h = h_max;
+  }
+  std::ostringstream why;
+  why << "no stable position after " << budget << " steps (event budget " << e.max_events << " x 100) with "
+      << active.size() << " contacts";
+  fail(why.str(), x);
+}
+
+}  // namespace
+
+Vec3 place_in_mesh(const MeshEngine& engine, std::int64_t id, Vec3 x, double r) {
+  Walker w{engine, id, r, {}, {}, Vec3::Constant(std::numeric_limits<double>::quiet_NaN()), {}, {}};
+  x = w.place(x);
+  if (!x.allFinite()) throw PlacementError(id, "the placement ended at a non-finite position");
+  if (engine.mesh.crossings_below(x.x(), x.y(), x.z()) % 2 == 0)
+    w.fail("came to rest outside the mesh (over its rim, or below an opening)", x);
+  return x;
+}
+
+}  // namespace btr
