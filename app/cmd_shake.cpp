@@ -77,6 +77,9 @@ int run(const Options& o, const CLI::App& cmd) {
   btr::Scene scene = btr::load_scene(o.scene);
   if (!scene.shaking)
     throw btr::SceneError(o.scene + ": missing table [shaking] (cycles, lift, noise, snapshot_every)");
+  if (scene.container.kind == btr::ContainerKind::Mesh)
+    throw btr::SceneError(o.scene + ": container.kind: \"mesh\" is not shaken: a redeposition starts its grains "
+                          "inside the container, which a triangle mesh's placement does not support");
   const std::uint64_t seed = cmd.count("--seed") ? o.seed : scene.seed;
   scene.seed = seed;
   if (cmd.count("--cycles")) scene.shaking->cycles = o.cycles;

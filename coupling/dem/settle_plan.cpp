@@ -36,6 +36,10 @@ void check_settle_scene(const Scene& scene) {
              "\"hele-shaw\": the plates set the packing across the whole gap, which a periodic calibration cell "
              "does not have, and the cell's scenes are heaps. " + std::string(kHeapReason));
     case ContainerKind::Drum: refuse(scene, "container.kind", "\"drum\": dynamic BTR, not a bed at rest");
+    case ContainerKind::Mesh:
+      refuse(scene, "container.kind",
+             "\"mesh\": btr measure has no bulk window in a mesh, so no target can be measured or checked there; "
+             "relax the BTR fill with `btr relax`");
   }
   if (scene.source.kind != SourceSpec::Kind::Rain)
     refuse(scene, "source.kind",

@@ -73,6 +73,7 @@ Container container_for(const Case& c) {
       k.radius = c.dim == 2 ? 2 * L : L;
       k.size_y = c.dim == 2 ? 0 : 0.75 * L;
       break;
+    case ContainerKind::Mesh: break;  // not among these cases: triangle meshes have tests/btr/test_mesh.cpp
   }
   return k;
 }
@@ -113,6 +114,7 @@ std::vector<Drop> drops_for(const Case& c, const Container& k, std::uint64_t see
         q.x = (u() - 0.5) * 2 * (k.radius - q.r);
         q.y = c.dim == 3 ? (u() - 0.5) * (k.size_y - 2 * q.r) : 0.0;
         break;
+      case ContainerKind::Mesh: break;  // not among these cases
     }
   }
   return d;
@@ -206,6 +208,7 @@ TEST_P(Invariants, PackingIsValidAndBreakingItIsCaught) {
       case ContainerKind::HeleShaw: q.x.x() = 0.5 * k.size_x - 0.5 * q.r; break;
       case ContainerKind::Cylinder: q.x.x() = k.radius - 0.5 * q.r, q.x.y() = 0; break;
       case ContainerKind::Drum: q.x.x() = k.radius - 0.5 * q.r, q.x.z() = k.radius; break;  // through the wall
+      case ContainerKind::Mesh: break;  // not among these cases
     }
     const CheckReport br = check_packing(b, c.dim, k);
     EXPECT_GE(br.outside, 1) << describe(br);

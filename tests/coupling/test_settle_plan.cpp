@@ -55,6 +55,7 @@ TEST(SettlePlan, RefusesHeapsAndDynamicScenesNamingFileAndField) {
       {"container.kind", [](Scene& s) { s.container.kind = ContainerKind::Open; }},
       {"container.kind", [](Scene& s) { s.container.kind = ContainerKind::HeleShaw; }},
       {"container.kind", [](Scene& s) { s.container.kind = ContainerKind::Drum; }},
+      {"container.kind", [](Scene& s) { s.container.kind = ContainerKind::Mesh; }},
       {"source.kind", [](Scene& s) { s.source.kind = SourceSpec::Kind::Point; }},
       {"source.kind", [](Scene& s) { s.source.kind = SourceSpec::Kind::Region; }},
       {"[clusters]", [](Scene& s) { s.clusters = ClustersSpec{}; }},
