@@ -168,6 +168,12 @@ std::optional<SceneProblem> scene_value_problem(const Scene& s, FieldNames names
       return problem_of(l, "= " + g6(l.value) + " m is " + g6(l.value / smallest->value) + " times the smallest grain radius (" +
                          smallest->field(names) + " = " + g6(smallest->value) + " m); expected at most " + g6(kMaxLengthRatio) +
                          " times: coordinates that large are rounded by more than the placement's precision");
+  if (s.container.kind == ContainerKind::Drum && s.container.radius > kMaxDrumRadiusRatio * smallest->value)
+    return problem("container.radius", "container.radius",
+                   "= " + g6(s.container.radius) + " m is " + g6(s.container.radius / smallest->value) +
+                       " times the smallest grain radius (" + smallest->field(names) + " = " + g6(smallest->value) +
+                       " m); expected at most " + g6(kMaxDrumRadiusRatio) +
+                       " times in a drum: beyond it the rolling on its wall loses the placement's precision");
   return std::nullopt;
 }
 
