@@ -4,7 +4,6 @@
 // relaxation of the BTR packing to that target (coupling/dem/settle_plan.h says what is chosen and why).
 #include <algorithm>
 #include <chrono>
-#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -14,7 +13,6 @@
 #include "btr/scene/size_budget.h"
 #include "commands.h"
 #include "coupling/dem/process.h"
-#include "coupling/dem/relax_target.h"
 #include "coupling/dem/settle_plan.h"
 #include "coupling/engines.h"
 #include "coupling/io/atomic_file.h"
@@ -125,7 +123,6 @@ int run(const Options& o, const CLI::App& cmd) {
     const fs::path dir = out / "calibration";
     btr::PourResult r = btr::pour(grains, cal.scene, engine, settings, dir.string(),
                                   scene_packing_meta(cal.scene, grains, seed, "settle calibration pour"));
-    target = btr::bulk_packing_fraction(r.poured.grains, cal.scene, btr::kCalibrationMargin);
     btr::MetricsOptions window;
     window.margin_diameters = btr::kCalibrationMargin;
     const btr::PackingMeasures m = measure_in_scene(r.poured.grains, cal.scene, window);
@@ -133,9 +130,10 @@ int run(const Options& o, const CLI::App& cmd) {
     btr::write_packing_meta(dir.string(), "poured", r.poured.meta);
     const json& pour_record = r.poured.meta["pour"];
     btr::write_text_file((dir / "pour.json").string(), pour_record.dump(1) + "\n");
-    if (!std::isfinite(target) || !m.bulk.valid)
+    if (!m.bulk.valid)
       throw btr::SceneError("--calibration-grains: the calibration pour's bulk window is empty (" + m.bulk.note +
                             "): its bed of " + std::to_string(cal.grains) + " grains is too shallow; give more");
+    target = m.bulk.packing_fraction;
     target_from = {{"source", "calibration pour"},
                    {"grains", cal.grains},
                    {"cell", {{"kind", "periodic"}, {"width", cal.width}, {"dimension", scene.dimension}}},
@@ -164,10 +162,12 @@ int run(const Options& o, const CLI::App& cmd) {
   settings.np = o.np;
   settings.wall_time_limit = o.time_limit;
   btr::RelaxResult r;
+  btr::PackingMeasures settled_measures;
   {
     const StepClock clock;
     r = btr::relax(btr_packing, relax_scene, engine, settings, (out / "relax").string());
-    r.relaxed.meta["measures"] = measures_to_json(measure_in_scene(r.relaxed.grains, scene));
+    settled_measures = measure_in_scene(r.relaxed.grains, scene);
+    r.relaxed.meta["measures"] = measures_to_json(settled_measures);
     btr::write_packing_meta((out / "relax").string(), "relaxed", r.relaxed.meta);
     steps.push_back(clock.finish("relax", r.cpu_seconds,
                                  {{"what", "DEM relaxation of the BTR packing to the target"},
@@ -207,7 +207,7 @@ int run(const Options& o, const CLI::App& cmd) {
   btr::write_packing_meta(o.out, scene.name, settled.meta);
   btr::write_text_file((out / "settle.json").string(), record.dump(1) + "\n");
 
-  say(measures_summary(measure_in_scene(settled.grains, scene)));
+  say(measures_summary(settled_measures));
   say("processor time " + std::to_string(record["cpu_seconds"].get<double>()) + " s (calibration included), wall " +
       std::to_string(record["wall_seconds"].get<double>()) + " s");
   say("wrote " + o.out + "/" + scene.name + ".csv (.json, .vtp), settle.json, dem_input/, and each step's folder "

@@ -23,9 +23,7 @@ void check_pour_grains(const Grains& grains, const Scene& scene) {
       throw RelaxRefused("pour: grain " + std::to_string(i + 1) + " has radius " + g6(grains[i].r) +
                          "; expected a positive number");
   }
-  if (scene.clusters)
-    throw RelaxRefused((scene.file.empty() ? "scene '" + scene.name + "'" : scene.file) +
-                       ": [clusters]: the pour releases single grains, not rigid clusters");
+  if (scene.clusters) refuse_scene_field(scene, "[clusters]", "the pour releases single grains, not rigid clusters");
 }
 
 std::vector<std::string> write_pour_inputs(const PourLattice& lattice, const Scene& pour, const EngineAdapter& adapter,

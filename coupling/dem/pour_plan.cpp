@@ -47,9 +47,6 @@ double lateral_clearance(const std::vector<DemWall>& walls, double x, double y) 
 
 double wrap(double x, double period) { return x - period * std::floor(x / period + 0.5); }
 
-[[noreturn]] void refuse(const Scene& scene, const std::string& field, const std::string& what) {
-  throw RelaxRefused((scene.file.empty() ? "scene '" + scene.name + "'" : scene.file) + ": " + field + ": " + what);
-}
 
 // Uniform in [0, 1) from a 64-bit draw, as the drops draw theirs (btr/placement/drops.h).
 double unit(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
@@ -64,14 +61,14 @@ std::vector<Site> pour_sites(const Scene& scene, double r_max) {
   const double margin = 1.01 * r_max + jitter;  // a jittered grain still clears every wall
   // A mesh has no lattice of release sites written for it yet (its footprint is not a rectangle or disk).
   if (c.kind == ContainerKind::Mesh)
-    refuse(scene, "container.kind",
+    refuse_scene_field(scene, "container.kind",
            "the reference pour does not support a mesh container yet (its release lattice covers boxes, "
            "cylinders and open floors); relax a BTR packing of it with `btr relax` instead");
   std::vector<DemWall> walls;
   try {
     walls = dem_walls(c, dim);
   } catch (const std::runtime_error& e) {
-    refuse(scene, "container", e.what());
+    refuse_scene_field(scene, "container", e.what());
   }
   std::vector<Site> sites;
   auto cross = [&](const std::vector<double>& xs, const std::vector<double>& ys) {
@@ -115,7 +112,7 @@ std::vector<Site> pour_sites(const Scene& scene, double r_max) {
           break;
         }
         default:
-          refuse(scene, "source.kind",
+          refuse_scene_field(scene, "source.kind",
                  std::string("a ") + (scene.source.kind == SourceSpec::Kind::Rain ? "rain" : "list") +
                      " source is poured over the container's footprint, and an open floor has none; use a point or "
                      "region source");
@@ -145,7 +142,7 @@ std::vector<Site> pour_sites(const Scene& scene, double r_max) {
       if (lateral_clearance(walls, s.first, s.second) >= need) inside.push_back(s);
     if (!inside.empty()) return inside;
   }
-  refuse(scene, "source", "no lattice site of the pour (" + g6(spacing) +
+  refuse_scene_field(scene, "source", "no lattice site of the pour (" + g6(spacing) +
                               " m apart, 2.2 largest radii) fits the source inside the container");
 }
 
@@ -267,8 +264,7 @@ RelaxPlan make_pour_plan(const PourLattice& lattice, const Scene& pour, const Po
 }
 
 Grains scene_drop_grains(const Scene& scene, std::uint64_t seed) {
-  if (scene.clusters)
-    throw RelaxRefused(scene.file + ": [clusters]: the pour releases single grains, not rigid clusters");
+  if (scene.clusters) refuse_scene_field(scene, "[clusters]", "the pour releases single grains, not rigid clusters");
   DropSequence drops(scene, seed);
   Grains grains(static_cast<std::size_t>(drops.count()));
   for (Grain& g : grains) {

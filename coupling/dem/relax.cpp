@@ -28,6 +28,10 @@ namespace btr {
 
 namespace fs = std::filesystem;
 
+void refuse_scene_field(const Scene& scene, const std::string& field, const std::string& why) {
+  throw RelaxRefused((scene.file.empty() ? "scene '" + scene.name + "'" : scene.file) + ": " + field + ": " + why);
+}
+
 namespace {
 
 constexpr int kLogTailLines = 25;

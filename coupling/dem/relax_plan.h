@@ -17,6 +17,9 @@ class RelaxRefused : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Throws RelaxRefused "FILE: FIELD: WHY" (a scene without a file is named "scene 'NAME'").
+[[noreturn]] void refuse_scene_field(const Scene& scene, const std::string& field, const std::string& why);
+
 // Time step (stable step, or the requested one if it is not above it), stop threshold and the
 // largest initial overlap. Throws RelaxRefused for a requested step above the stable one or an
 // overlap above settings.max_overlap, each with the number that would be accepted.

@@ -10,10 +10,6 @@
 namespace btr {
 namespace {
 
-[[noreturn]] void refuse(const Scene& scene, const std::string& field, const std::string& why) {
-  throw RelaxRefused((scene.file.empty() ? "scene '" + scene.name + "'" : scene.file) + ": " + field + ": " + why);
-}
-
 const char* kHeapReason =
     "btr settle serves beds only; a heap's angle after a DEM relaxation of its BTR packing is not yet a pour's "
     "(docs/guide/settle.md, \"What it refuses\"): pour it with `btr pour`";
@@ -21,28 +17,28 @@ const char* kHeapReason =
 }  // namespace
 
 void check_settle_scene(const Scene& scene) {
-  if (scene.clusters) refuse(scene, "[clusters]", "btr settle releases single grains, not rigid clusters");
-  if (scene.drum) refuse(scene, "[drum]", "a rotating drum is dynamic BTR, not a bed at rest");
-  if (scene.shaking) refuse(scene, "[shaking]", "a shaken packing is dynamic BTR, not a poured bed");
+  if (scene.clusters) refuse_scene_field(scene, "[clusters]", "btr settle releases single grains, not rigid clusters");
+  if (scene.drum) refuse_scene_field(scene, "[drum]", "a rotating drum is dynamic BTR, not a bed at rest");
+  if (scene.shaking) refuse_scene_field(scene, "[shaking]", "a shaken packing is dynamic BTR, not a poured bed");
   if (scene.intruder)
-    refuse(scene, "[intruder]", "the calibration pour holds the scene's bed grains only; an intruder is not served");
+    refuse_scene_field(scene, "[intruder]", "the calibration pour holds the scene's bed grains only; an intruder is not served");
   switch (scene.container.kind) {
     case ContainerKind::Periodic:
     case ContainerKind::Box:
     case ContainerKind::Cylinder: break;
-    case ContainerKind::Open: refuse(scene, "container.kind", std::string("\"open\" floor: a heap. ") + kHeapReason);
+    case ContainerKind::Open: refuse_scene_field(scene, "container.kind", std::string("\"open\" floor: a heap. ") + kHeapReason);
     case ContainerKind::HeleShaw:
-      refuse(scene, "container.kind",
+      refuse_scene_field(scene, "container.kind",
              "\"hele-shaw\": the plates set the packing across the whole gap, which a periodic calibration cell "
              "does not have, and the cell's scenes are heaps. " + std::string(kHeapReason));
-    case ContainerKind::Drum: refuse(scene, "container.kind", "\"drum\": dynamic BTR, not a bed at rest");
+    case ContainerKind::Drum: refuse_scene_field(scene, "container.kind", "\"drum\": dynamic BTR, not a bed at rest");
     case ContainerKind::Mesh:
-      refuse(scene, "container.kind",
+      refuse_scene_field(scene, "container.kind",
              "\"mesh\": btr measure has no bulk window in a mesh, so no target can be measured or checked there; "
              "relax the BTR fill with `btr relax`");
   }
   if (scene.source.kind != SourceSpec::Kind::Rain)
-    refuse(scene, "source.kind",
+    refuse_scene_field(scene, "source.kind",
            "expected \"rain\" (a bed over the whole container); a point or region source builds a heap, a list "
            "source places given positions. " + std::string(kHeapReason));
 }
