@@ -47,10 +47,11 @@ CalibrationPlan calibration_plan(const Scene& scene, std::int64_t grains) {
   CalibrationPlan plan;
   const int dim = scene.dimension;
   const std::vector<double> fraction = number_fractions(scene.grains, dim);
-  double mean_volume = 0.0;
+  double mean_volume = 0.0, mean_radius = 0.0;
   for (std::size_t c = 0; c < scene.grains.components.size(); ++c) {
     const RadiusSpec& r = scene.grains.components[c].radius;
     mean_volume += fraction[c] * (dim == 3 ? 4.0 / 3.0 * M_PI * radius_moment(r, 3) : M_PI * radius_moment(r, 2));
+    mean_radius += fraction[c] * radius_moment(r, 1);
   }
   Scene cell = scene;
   cell.name = scene.name + "_calibration";
@@ -62,7 +63,8 @@ CalibrationPlan calibration_plan(const Scene& scene, std::int64_t grains) {
   const double d_max = 2.0 * DropSequence(cell, scene.seed).r_max();
   plan.largest_diameter = d_max;
   plan.mean_grain_volume = mean_volume;
-  plan.width = (dim == 3 ? kCalibrationWidth3d : kCalibrationWidth2d) * d_max;
+  plan.width = dim == 3 ? std::max(kCalibrationWidth3d * d_max, kCalibrationMeanDiameters3d * 2.0 * mean_radius)
+                        : kCalibrationWidth2d * d_max;
   cell.container.size_x = plan.width;
   cell.container.size_y = dim == 3 ? plan.width : 0.0;
   if (grains > 0) {

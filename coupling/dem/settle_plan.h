@@ -19,6 +19,12 @@ inline constexpr double kCalibrationDepth = 10.0;
 // Width of the calibration cell in largest diameters: 3D square, 2D a line of this length.
 inline constexpr double kCalibrationWidth3d = 5.0;
 inline constexpr double kCalibrationWidth2d = 20.0;
+// ... and at least this many number-mean diameters in 3D: equal spheres order against a period of a few
+// diameters (a monodisperse bed's target came out 0.007 high in a cell 5 diameters wide, 0.002 at 7, against
+// its pours: docs/guide/settle.md), grains of several sizes do not; for the constant-mass law at a size ratio
+// of 2 (mean diameter 0.69 d_max) 5 largest diameters already span 7.2 mean ones, so only narrower
+// distributions widen the cell.
+inline constexpr double kCalibrationMeanDiameters3d = 7.0;
 // The packing fraction the cell's grain count is sized with (a random loose packing): only the depth follows.
 inline constexpr double kCalibrationSizingPhi3d = 0.60;
 inline constexpr double kCalibrationSizingPhi2d = 0.80;
@@ -42,7 +48,8 @@ struct CalibrationPlan {
   double mean_grain_volume = 0.0;  // m^3 (2D: m^2), exact from the scene's radius distributions
 };
 
-// The calibration cell of a scene served by settle: periodic, kCalibrationWidth largest diameters wide, with the
+// The calibration cell of a scene served by settle: periodic, kCalibrationWidth largest diameters wide (3D: and at
+// least kCalibrationMeanDiameters3d mean diameters), with the
 // count that fills it kCalibrationDepth largest diameters deep at the sizing packing fraction (or `grains`
 // when given: at least kMinCalibrationGrains). Same seed, relax section (engine, model, time-step fraction,
 // stop ratio, max time) and material as the scene.

@@ -72,24 +72,40 @@ TEST(SettlePlan, RefusesHeapsAndDynamicScenesNamingFileAndField) {
   }
 }
 
-TEST(SettlePlan, CalibrationCellIsFiveLargestDiametersWideAndTenDeepIn3d) {
+TEST(SettlePlan, CalibrationCellOfEqualSpheresIsSevenDiametersWideAndTenDeep) {
   Scene s = bed(3);
   s.seed = 7;
   s.relax.target_phi = 0.7;  // a scene's own target is not the calibration's
   const CalibrationPlan p = calibration_plan(s);
   const double d = 2e-3, v = 4.0 / 3.0 * M_PI * 1e-9;
   EXPECT_DOUBLE_EQ(p.largest_diameter, d);
-  EXPECT_DOUBLE_EQ(p.width, 5 * d);
+  EXPECT_DOUBLE_EQ(p.width, 7 * d);  // 7 mean diameters beat 5 largest ones
   EXPECT_NEAR(p.mean_grain_volume, v, 1e-24);
-  // 0.6 (5 d)^2 (10 d) / (pi d^3 / 6) = 150 / (pi / 6) = 286.48..., rounded up
-  EXPECT_EQ(p.grains, 287);
-  EXPECT_EQ(p.scene.grains.count, 287);
+  // 0.6 (7 d)^2 (10 d) / (pi d^3 / 6) = 294 / (pi / 6) = 561.5..., rounded up
+  EXPECT_EQ(p.grains, 562);
+  EXPECT_EQ(p.scene.grains.count, 562);
   EXPECT_EQ(p.scene.container.kind, ContainerKind::Periodic);
-  EXPECT_DOUBLE_EQ(p.scene.container.size_x, 5 * d);
-  EXPECT_DOUBLE_EQ(p.scene.container.size_y, 5 * d);
+  EXPECT_DOUBLE_EQ(p.scene.container.size_x, 7 * d);
+  EXPECT_DOUBLE_EQ(p.scene.container.size_y, 7 * d);
   EXPECT_EQ(p.scene.source.kind, SourceSpec::Kind::Rain);
   EXPECT_FALSE(p.scene.relax.target_phi.has_value());
   EXPECT_EQ(p.scene.seed, 7u);
+}
+
+TEST(SettlePlan, CalibrationCellOfAWideMixtureIsFiveLargestDiametersWide) {
+  Scene s = bed(3);
+  RadiusSpec& r = s.grains.components[0].radius;
+  r.kind = RadiusSpec::Kind::ConstantMass;
+  r.min = 0.5e-3;
+  r.max = 1e-3;
+  const CalibrationPlan p = calibration_plan(s);
+  // number-mean radius of the constant-mass law on [a, b]: a b ln(b / a) / (b - a) = 0.693 mm, so 7 mean
+  // diameters are 9.70 mm, under 5 largest ones (10 mm)
+  EXPECT_LT(7 * 2 * 1e-3 * std::log(2.0), 10e-3);
+  EXPECT_DOUBLE_EQ(p.width, 10e-3);
+  r.min = 0.8e-3;  // a ratio of 1.25: mean radius 0.893 mm, 7 mean diameters 12.5 mm
+  const double mean_r = 0.8e-3 * 1e-3 * std::log(1.25) / 0.2e-3;
+  EXPECT_NEAR(calibration_plan(s).width, 7 * 2 * mean_r, 1e-15);
 }
 
 TEST(SettlePlan, CalibrationOfA2dMixtureCountsEachComponentsArea) {
