@@ -12,6 +12,7 @@
   nano-powder [-o OUTDIR] [--cycles N]    rigid clusters redeposited: <h> = a - b exp(-n/tau) (2D, 3D)
   stratification [-o OUTDIR] [--tiny]     two-species heap in a Hele-Shaw cell: stripes, top-toe segregation, BTR vs DEM
   settle-matrix -o OUTDIR [--count N]     btr settle against reference pours over beds and heaps (docs/settle)
+  dynamic-vs-dem [-o OUTDIR] [--tiny]     dynamic BTR against DEM: drum segregation, Brazil nut, cost per revolution
 
 The `btr` program is $BTR_BINARY, else build/app/btr. Exit status: 0 done, 2 bad input, 3 a step failed
 (its error is printed and recorded in OUTDIR/run.json; what earlier steps wrote is kept)."""
@@ -191,6 +192,16 @@ def main(argv=None) -> int:
                     help="reuse a btr settle already finished in OUT/runs/ROW/settle from the same scene and engine")
     sm.add_argument("--pours-only", action="store_true", help="the reference pours alone (no btr settle)")
 
+    dv = sub.add_parser("dynamic-vs-dem", help="dynamic BTR (btr drum, btr shake) against DEM (the same commands "
+                                               "with --engine): drum segregation, Brazil nut, cost (docs/dynamic_vs_dem)")
+    dv.add_argument("-o", "--out", help="output folder (default out/dynamic_vs_dem)")
+    dv.add_argument("--engine", choices=["liggghts", "yade"], default="liggghts",
+                    help="the drum's DEM engine (the Brazil nut always taps in LIGGGHTS)")
+    dv.add_argument("--tiny", action="store_true", help="one 2D drum for a tenth of a revolution, one Phi, one tap")
+    dv.add_argument("--seeds", default="1,2,3", help="comma-separated seeds of each side (default 1,2,3)")
+    dv.add_argument("--parts", default="drum,brazil,cost", help="some of drum, brazil, cost (default all)")
+    dv.add_argument("--np", type=int, default=1)
+
     args = ap.parse_args(argv)
     if getattr(args, "out", None):
         # Every study runs btr and the engines inside its output folders: a relative -o must not nest.
@@ -312,6 +323,19 @@ def main(argv=None) -> int:
             run_settle_matrix(args.out, args.count, args.depth, args.heap_count, args.yade_count, args.engine,
                               args.ref_seeds, args.np, args.margin, args.reuse_pours, args.pours_only, only, progress,
                               reuse_settles=args.reuse_settles)
+        elif args.command == "dynamic-vs-dem":
+            from btrdem.studies.dynamic_vs_dem import run_dynamic_vs_dem
+            try:
+                seeds = [int(x) for x in args.seeds.split(",") if x]
+            except ValueError:
+                raise InputError(f"--seeds: expected comma-separated integers, got {args.seeds!r}") from None
+            parts = [x for x in args.parts.split(",") if x]
+            if not seeds or not parts or any(x not in ("drum", "brazil", "cost") for x in parts):
+                raise InputError(f"--seeds/--parts: expected seeds and some of drum, brazil, cost; got "
+                                 f"{args.seeds!r}, {args.parts!r}")
+            if args.np < 1:
+                raise InputError(f"--np: expected a positive number of ranks, got {args.np}")
+            run_dynamic_vs_dem(args.out, args.engine, args.tiny, seeds, args.np, tuple(parts), progress)
     except Interrupted as e:
         print(f"btr_workflow.py {args.command}: {e}: the program it ran was stopped; run.json and the tables "
               "record the interrupted case", file=sys.stderr)

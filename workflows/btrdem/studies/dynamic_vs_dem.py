@@ -1,0 +1,241 @@
+"""`dynamic-vs-dem`: dynamic BTR against DEM in the rotating drum and the tapped Brazil-nut box.
+
+The same scene (grains, fill, seed) runs through dynamic BTR (`btr drum`, `btr shake`) and through a DEM engine
+(`btr drum --engine`, `btr shake --engine`): the engine's drum turns at the Froude number of the case, its floor
+taps at the case's Gamma. Both write the same per-snapshot table (NAME_steps.csv, NAME_cycles.csv: the measures
+come from the one C++ function each), so the comparison reads columns, nothing engine-specific.
+
+Drum cases: dimension x fill x Froude number; DEM with several seeds (its scatter is the unit of the error),
+BTR with the same seeds. Per run: radial segregation and core index against revolutions, the dynamic angle
+(mean over the last revolution), the revolutions to 90 % of the final core index, and processor seconds per
+revolution. Brazil-nut cases: diameter ratio Phi; the intruder's height against cycles (BTR) and taps (DEM).
+A cost row measures both sides' processor time per revolution on one larger drum.
+
+Outputs (rewritten after every run, so a stopped study keeps what it did): runs/<case>/<side>/ (scenes,
+snapshots, tables), drum_runs.csv, drum_vs_dem.csv, brazil_runs.csv, cost.csv, segregation_vs_dem.png,
+intruder_vs_dem.png, report.md (dynamic_vs_dem_report.py), run.json. A failed run is a row with its reason."""
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+
+import numpy as np
+
+from ..core.io import write_scene_toml
+from ..core.runner import REPO, RunRecord, StepFailed, find_btr, run_command
+from . import dynamic_vs_dem_report as out_report
+from .brazil_nut import read_cycles, scene_dict as brazil_scene
+from .drum import read_steps
+
+G = 9.81
+
+# Each drum case: a scene (fill and grains), Froude numbers, revolutions; DEM seeds are the run's --seeds.
+FULL = {
+    "drum": {"dims": [2, 3], "fills": {"low": 0.3, "high": 0.45}, "froude": [3e-3, 1e-2], "revolutions": 3.0},
+    "brazil": {"phis": [2.0, 3.0, 4.0, 6.0], "count": 600, "size_d": 8.0, "taps": 10, "gamma": 2.0},
+    "cost_grains": 10000,
+}
+TINY = {
+    "drum": {"dims": [2], "fills": {"low": 0.3}, "froude": [1e-2], "revolutions": 0.1},
+    "brazil": {"phis": [3.0], "count": 80, "size_d": 5.0, "taps": 1, "gamma": 2.0},
+    "cost_grains": 0,
+}
+
+
+def drum_scene(dim: int, fill: float, seed: int, steps_per_rev: int = 100) -> dict:
+    """A drum (2D: radius 20 mm; 3D: radius 10 mm, 6 mm long, periodic ends: no end-wall friction, as the 2D
+    drum has none) with a bidisperse fill (radii 0.5 and 1 mm, equal solid fractions) filling `fill` of its
+    area (volume) at a packing fraction of 0.8 (2D) / 0.6 (3D)."""
+    R, length = (0.02 if dim == 2 else 0.01), 0.006
+    r_small, r_large = 0.5e-3, 1.0e-3
+    phi_bulk = 0.8 if dim == 2 else 0.6
+    solid = fill * np.pi * R * R * phi_bulk * (1.0 if dim == 2 else length)
+    # Equal solid fractions: the number fraction of small grains is w / (1 + w), w = (r_large / r_small)^dim.
+    w = (r_large / r_small) ** dim
+    f_small = w / (1.0 + w)
+    unit = np.pi if dim == 2 else 4.0 / 3.0 * np.pi
+    count = int(round(solid / (unit * (f_small * r_small ** dim + (1 - f_small) * r_large ** dim))))
+    container = {"kind": "drum", "radius": R}
+    if dim == 3:
+        container.update(length=length, ends="periodic")
+    return {
+        "scene": {"name": "drum", "dimension": dim, "seed": seed},
+        "grains": {"count": count, "density": 2500.0, "fraction_by": "volume",
+                   "component": [{"species": 1, "fraction": 0.5, "radius": {"distribution": "constant", "value": r_small}},
+                                 {"species": 2, "fraction": 0.5, "radius": {"distribution": "constant", "value": r_large}}]},
+        "container": container,
+        "source": {"kind": "rain"},
+        "drum": {"steps_per_revolution": steps_per_rev, "revolutions": 1.0, "lift": R / 10.0,
+                 "snapshot_every": max(1, steps_per_rev // 20)},
+    }
+
+
+def t90(rev: np.ndarray, index: np.ndarray) -> float | None:
+    """Revolutions until the index first reaches 90 % of its final value (the mean over the last fifth of the
+    run), counted from its value at the fill; None if it never rises."""
+    if len(index) < 3:
+        return None
+    q = max(1, len(index) // 5)
+    final, start = float(np.mean(index[-q:])), float(index[0])
+    if not final > start:
+        return None
+    hit = np.nonzero(index >= start + 0.9 * (final - start))[0]
+    return float(rev[hit[0]]) if len(hit) else None
+
+
+def drum_summary(t: dict, steps_per_rev: int) -> dict:
+    rev = t["step"] / steps_per_rev
+    core = t["core_large_R"] - t["core_small_R"]
+    last = rev >= rev[-1] - 1.0 if rev[-1] >= 1.0 else rev > 0.5 * rev[-1]
+    ang = t["surface_angle_deg"][last]
+    cpu = t["cpu_seconds"]  # of each row's interval since the previous row; row 0: the fill (and DEM's still settle)
+    span = rev[-1] - rev[0]
+    return {"revolutions": float(rev[-1]), "segregation_end": float(np.mean(t["segregation_index"][last])),
+            "core_end": float(np.mean(core[last])), "core_t90_rev": t90(rev, core),
+            "dynamic_angle_deg": float(np.nanmean(ang)) if np.any(np.isfinite(ang)) else None,
+            "cpu_per_rev": float(np.sum(cpu[1:]) / span) if span > 0 else None}
+
+
+class Study:
+    def __init__(self, outdir, engine, plan, seeds, np_, progress):
+        self.out, self.engine, self.plan, self.seeds, self.np = Path(outdir), engine, plan, seeds, np_
+        self.progress = progress
+        self.btr = find_btr()
+        self.drum_rows, self.brazil_rows, self.cost_rows = [], [], []
+        self.series = {}  # run tag -> (x, y) for the figures
+
+    def _run(self, argv, d: Path, label: str) -> dict:
+        res = run_command(argv, d, label, progress=self.progress)
+        if res["returncode"] != 0:
+            raise StepFailed(f"{label} exited with status {res['returncode']}: "
+                             f"{Path(res['stderr']).read_text(errors='replace').strip()[-600:]}")
+        return res
+
+    def write(self):
+        out_report.write_outputs(self)
+
+    # ---- drum
+    def drum_run(self, rec, case: str, side: str, scene: dict, froude: float | None, seed: int, revolutions: float):
+        tag = f"{case}_{side}" + (f"_fr{froude:g}" if froude is not None else "") + f"_s{seed}"
+        d = self.out / "runs" / case / tag
+        row = {"case": case, "side": side, "froude": froude, "seed": seed, "dimension": scene["scene"]["dimension"],
+               "grains": scene["grains"]["count"]}
+        with rec.case(f"drum {tag}", self.drum_rows, row, on_row=lambda _: self.write()):
+            sc = copy.deepcopy(scene)
+            sc["scene"]["seed"] = seed
+            sc["drum"]["revolutions"] = revolutions
+            if froude is not None:
+                sc["drum"]["froude"] = froude
+            d.mkdir(parents=True, exist_ok=True)
+            path = d / "scene.toml"
+            write_scene_toml(path, sc)
+            argv = [self.btr, "drum", str(path), "-o", str(d), "--quiet"]
+            if side != "btr":
+                argv += ["--engine", side, "--np", str(self.np), "--revolutions", f"{revolutions:g}"]
+            res = self._run(argv, d, f"btr drum {side}")
+            t = read_steps(d / "drum_steps.csv")
+            row.update(drum_summary(t, int(sc["drum"]["steps_per_revolution"])))
+            row["cpu_seconds"] = res["cpu_seconds"]
+            rev = t["step"] / int(sc["drum"]["steps_per_revolution"])
+            self.series[tag] = (rev, t["core_large_R"] - t["core_small_R"], t["surface_angle_deg"])
+
+    def drum_cases(self, rec):
+        p = self.plan["drum"]
+        for dim in p["dims"]:
+            for fill_name, fill in p["fills"].items():
+                case = f"drum{dim}d_{fill_name}"
+                scene = drum_scene(dim, fill, 1)
+                for seed in self.seeds:
+                    self.drum_run(rec, case, "btr", scene, None, seed, p["revolutions"])
+                for fr in p["froude"]:
+                    for seed in self.seeds:
+                        self.drum_run(rec, case, self.engine, scene, fr, seed, p["revolutions"])
+
+    def cost_case(self, rec):
+        """Processor time per revolution, both sides, on one 3D drum of plan['cost_grains'] grains: BTR over a
+        whole revolution, DEM over a twentieth of one (a rotating drum's cost per unit time is steady once the
+        flow has formed; the fill and the still relaxation are not counted: the table's first row is after them)."""
+        n = self.plan["cost_grains"]
+        if not n:
+            return
+        scene = drum_scene(3, 0.45, 1)
+        scale = (n / scene["grains"]["count"]) ** (1.0 / 3.0)
+        scene["container"]["radius"] *= scale
+        scene["container"]["length"] *= scale
+        scene["drum"]["lift"] *= scale
+        scene["grains"]["count"] = n
+        fr = self.plan["drum"]["froude"][-1]
+        for side, revs in (("btr", 1.0), (self.engine, 0.05)):
+            row = {"case": f"cost_{n}", "side": side, "grains": n, "froude": fr if side != "btr" else None,
+                   "revolutions_run": revs}
+            d = self.out / "runs" / "cost" / side
+            with rec.case(f"cost {side} {n} grains", self.cost_rows, row, on_row=lambda _: self.write()):
+                sc = copy.deepcopy(scene)
+                sc["drum"]["revolutions"] = revs
+                sc["drum"]["snapshot_every"] = 5
+                if side != "btr":
+                    sc["drum"]["froude"] = fr
+                d.mkdir(parents=True, exist_ok=True)
+                write_scene_toml(d / "scene.toml", sc)
+                argv = [self.btr, "drum", str(d / "scene.toml"), "-o", str(d), "--quiet"]
+                if side != "btr":
+                    argv += ["--engine", side, "--np", "1", "--revolutions", f"{revs:g}"]
+                self._run(argv, d, f"cost {side}")
+                t = read_steps(d / "drum_steps.csv")
+                s = drum_summary(t, int(sc["drum"]["steps_per_revolution"]))
+                row["cpu_per_rev"] = s["cpu_per_rev"]
+
+    # ---- Brazil nut
+    def brazil_cases(self, rec):
+        p = self.plan["brazil"]
+        for phi in p["phis"]:
+            for side in ("btr", self.engine if self.engine == "liggghts" else "liggghts"):
+                for seed in (self.seeds if side != "btr" else self.seeds[:1]):
+                    self.brazil_run(rec, phi, side, seed, p)
+
+    def brazil_run(self, rec, phi, side, seed, p):
+        tag = f"phi{phi:g}_{side}_s{seed}"
+        d = self.out / "runs" / "brazil" / tag
+        row = {"case": f"phi{phi:g}", "phi": phi, "side": side, "seed": seed}
+        with rec.case(f"brazil {tag}", self.brazil_rows, row, on_row=lambda _: self.write()):
+            sc = brazil_scene(3, p["size_d"], p["count"], p["taps"], 0.1, phi, seed, "shake")
+            if side != "btr":
+                sc["shaking"]["gamma"] = p["gamma"]
+            d.mkdir(parents=True, exist_ok=True)
+            write_scene_toml(d / "scene.toml", sc)
+            argv = [self.btr, "shake", str(d / "scene.toml"), "-o", str(d), "--quiet"]
+            if side != "btr":
+                argv += ["--engine", side, "--np", str(self.np), "--taps", str(p["taps"])]
+            res = self._run(argv, d, f"btr shake {side}")
+            t = read_cycles(d / "shake_cycles.csv")
+            z = t["intruder_z_d"]
+            n = t["cycle"][-1]
+            row.update(cycles=int(n), z0_d=float(z[0]), z_end_d=float(z[-1]),
+                       rise_d_per_cycle=float((z[-1] - z[0]) / n) if n > 0 else None,
+                       cpu_per_cycle=float(res["cpu_seconds"] / n) if n > 0 else None)  # the fill included
+            self.series[tag] = (t["cycle"], z, None)
+
+
+def run_dynamic_vs_dem(outdir=None, engine: str = "liggghts", tiny: bool = False, seeds=(1, 2, 3), np_: int = 1,
+                       parts=("drum", "brazil", "cost"), progress=print) -> dict:
+    outdir = Path(outdir) if outdir else REPO / "out" / "dynamic_vs_dem"
+    plan = copy.deepcopy(TINY if tiny else FULL)
+    seeds = list(seeds)[:1] if tiny else list(seeds)
+    rec = RunRecord(outdir, "dynamic-vs-dem", progress=progress, btr=find_btr(),
+                    settings={"engine": engine, "tiny": tiny, "seeds": seeds, "np": np_, "parts": list(parts),
+                              "plan": plan})
+    study = Study(outdir, engine, plan, seeds, np_, progress)
+    study.write()
+    if "drum" in parts:
+        study.drum_cases(rec)
+    if "brazil" in parts:
+        study.brazil_cases(rec)
+    if "cost" in parts:
+        study.cost_case(rec)
+    study.write()
+    rows = study.drum_rows + study.brazil_rows + study.cost_rows
+    failed = [r for r in rows if r["status"] != "ok"]
+    rec.finish({"runs": len(rows), "failed": len(failed), "report": str(outdir / "report.md")})
+    progress(f"dynamic-vs-dem: {len(rows)} runs ({len(failed)} failed); report {outdir / 'report.md'}")
+    return {"drum": study.drum_rows, "brazil": study.brazil_rows, "cost": study.cost_rows}
+
