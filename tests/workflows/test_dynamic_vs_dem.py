@@ -28,7 +28,7 @@ def test_drum_fill_has_equal_solid_fractions_and_the_asked_fill(dim):
     assert sc["grains"]["fraction_by"] == "volume"
     assert [c["fraction"] for c in sc["grains"]["component"]] == [0.5, 0.5]
     if dim == 3:
-        assert sc["container"]["ends"] == "periodic"
+        assert sc["container"]["ends"] == "walls"
 
 
 def test_t90_of_a_ramp_and_a_flat_curve():

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.io import write_scene_toml
+from ..core.io import read_json, write_scene_toml
 from ..core.runner import REPO, RunRecord, StepFailed, find_btr, run_command
 from . import dynamic_vs_dem_report as out_report
 from .brazil_nut import read_cycles, scene_dict as brazil_scene
@@ -43,8 +43,8 @@ TINY = {
 
 
 def drum_scene(dim: int, fill: float, seed: int, steps_per_rev: int = 100) -> dict:
-    """A drum (2D: radius 20 mm; 3D: radius 10 mm, 6 mm long, periodic ends: no end-wall friction, as the 2D
-    drum has none) with a bidisperse fill (radii 0.5 and 1 mm, equal solid fractions) filling `fill` of its
+    """A drum (2D: radius 20 mm; 3D: radius 10 mm, 6 mm long, flat end walls: the DEM drum has no periodic
+    ends) with a bidisperse fill (radii 0.5 and 1 mm, equal solid fractions) filling `fill` of its
     area (volume) at a packing fraction of 0.8 (2D) / 0.6 (3D)."""
     R, length = (0.02 if dim == 2 else 0.01), 0.006
     r_small, r_large = 0.5e-3, 1.0e-3
@@ -57,7 +57,7 @@ def drum_scene(dim: int, fill: float, seed: int, steps_per_rev: int = 100) -> di
     count = int(round(solid / (unit * (f_small * r_small ** dim + (1 - f_small) * r_large ** dim))))
     container = {"kind": "drum", "radius": R}
     if dim == 3:
-        container.update(length=length, ends="periodic")
+        container.update(length=length, ends="walls")
     return {
         "scene": {"name": "drum", "dimension": dim, "seed": seed},
         "grains": {"count": count, "density": 2500.0, "fraction_by": "volume",
@@ -88,12 +88,17 @@ def drum_summary(t: dict, steps_per_rev: int) -> dict:
     core = t["core_large_R"] - t["core_small_R"]
     last = rev >= rev[-1] - 1.0 if rev[-1] >= 1.0 else rev > 0.5 * rev[-1]
     ang = t["surface_angle_deg"][last]
-    cpu = t["cpu_seconds"]  # of each row's interval since the previous row; row 0: the fill (and DEM's still settle)
+    cpu = t["cpu_seconds"]  # BTR: of each step (row 0: the fill); DEM rows are replaced by drum_dem.json's figure
     span = rev[-1] - rev[0]
     return {"revolutions": float(rev[-1]), "segregation_end": float(np.mean(t["segregation_index"][last])),
             "core_end": float(np.mean(core[last])), "core_t90_rev": t90(rev, core),
             "dynamic_angle_deg": float(np.nanmean(ang)) if np.any(np.isfinite(ang)) else None,
             "cpu_per_rev": float(np.sum(cpu[1:]) / span) if span > 0 else None}
+
+
+def dem_cpu_per_rev(d: Path) -> float:
+    """The DEM rotation's engine processor seconds per revolution (drum_dem.json, written by btr drum --engine)."""
+    return float(read_json(d / "drum_dem.json")["engine_cpu_seconds_per_revolution"])
 
 
 class Study:
@@ -135,6 +140,8 @@ class Study:
             res = self._run(argv, d, f"btr drum {side}")
             t = read_steps(d / "drum_steps.csv")
             row.update(drum_summary(t, int(sc["drum"]["steps_per_revolution"])))
+            if side != "btr":  # the engine's processor time of the rotation alone (not the fill, not the settle)
+                row["cpu_per_rev"] = dem_cpu_per_rev(d)
             row["cpu_seconds"] = res["cpu_seconds"]
             rev = t["step"] / int(sc["drum"]["steps_per_revolution"])
             self.series[tag] = (rev, t["core_large_R"] - t["core_small_R"], t["surface_angle_deg"])
@@ -182,8 +189,8 @@ class Study:
                     argv += ["--engine", side, "--np", "1", "--revolutions", f"{revs:g}"]
                 self._run(argv, d, f"cost {side}")
                 t = read_steps(d / "drum_steps.csv")
-                s = drum_summary(t, int(sc["drum"]["steps_per_revolution"]))
-                row["cpu_per_rev"] = s["cpu_per_rev"]
+                row["cpu_per_rev"] = (drum_summary(t, int(sc["drum"]["steps_per_revolution"]))["cpu_per_rev"]
+                                      if side == "btr" else dem_cpu_per_rev(d))
 
     # ---- Brazil nut
     def brazil_cases(self, rec):
