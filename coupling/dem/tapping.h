@@ -1,0 +1,44 @@
+#pragma once
+// DEM tapping of a packing at rest (btr shake --engine; docs/guide/shake_dem.md), engine-independent part: the
+// plan (amplitude and period from the scene's [shaking] gamma and frequency, the time step a whole fraction of
+// the period, the rest's windows), the run through the engine's writer and read-back (relax_plan.h), the grains
+// after each tap and the record. The engines' writers turn RelaxPlan::tap (tap_schedule.h) into their inputs.
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "coupling/dem/engine_adapter.h"
+#include "coupling/dem/tap_schedule.h"
+
+namespace btr {
+
+struct TapSettings {
+  long taps = 1;
+  int np = 1;                       // LIGGGHTS: MPI ranks
+  double wall_time_limit = 3600.0;  // s; the engine run is killed past this
+};
+
+// Amplitude A [m] of a tap of peak acceleration gamma g at `frequency` [Hz]: A = gamma g / (2 pi f)^2.
+double tap_amplitude(double gamma, double frequency);
+
+// The plan of tapping `start` (a packing at rest): the relaxation's plan (time step rule, kinetic threshold; no
+// damping, no compaction), the time step lowered to period / ceil(period / step), and plan.tap. Throws
+// RelaxRefused (naming the scene field) for a scene without [shaking], a container other than periodic or box,
+// rigid clusters, or taps < 1.
+RelaxPlan make_tap_plan(const Packing& start, const Scene& scene, const TapSettings& settings,
+                        const std::string& engine);
+
+struct TapResult {
+  RelaxPlan plan;
+  RelaxResult run;                 // the whole engine run (final state, kinetic history, cpu and wall seconds)
+  std::vector<TapSnapshot> taps;   // after each tap's rest, grains wrapped into the cell
+  std::vector<double> cpu_seconds; // the engine's processor time up to each tap's end (the run's, shared by steps)
+  nlohmann::json record;           // shake_dem.json's "tapping" part
+};
+
+// Writes the inputs into dir, runs the engine, reads every tap back and checks it (ids kept, no centre below the
+// floor or beyond a wall). Throws EngineFailure, Interrupted or RelaxRefused.
+TapResult run_tapping(const Packing& start, const Scene& scene, const EngineAdapter& adapter, const std::string& engine,
+                      const TapSettings& settings, const RelaxPlan& plan, const std::string& dir);
+
+}  // namespace btr
