@@ -25,12 +25,13 @@ namespace btr_app {
 
 using nlohmann::json;
 
-int run_shake_dem(const ShakeOptions& o, const CLI::App& cmd, const btr::Scene& scene, std::uint64_t seed) {
+int run_shake_dem(const ShakeOptions& o, const CLI::App& cmd, const btr::Scene& btr_scene, std::uint64_t seed) {
   namespace fs = std::filesystem;
   if (o.check)
     throw btr::SceneError("--check: the self-check judges BTR packings (grains exactly touching); a DEM snapshot's "
                           "grains overlap at their contacts, so --check is refused with --engine");
-  const std::string name = output_name(o.name, scene);
+  const std::string name = output_name(o.name, btr_scene);
+  const btr::Scene scene = btr::engine_scene(btr_scene);  // the intruder gets the bed's material
   btr::TapSettings ts;
   ts.taps = cmd.count("--taps") ? static_cast<long>(o.taps) : static_cast<long>(scene.shaking->cycles);
   ts.np = o.np;
@@ -39,8 +40,8 @@ int run_shake_dem(const ShakeOptions& o, const CLI::App& cmd, const btr::Scene& 
 
   // The BTR packing of dynamic BTR's run: same scene, grains, intruder and seed.
   btr::Packing start;
-  start.grains = btr::run_scene(scene, seed, scene.grains.count, {}).grains;
-  const json scene_json = btr::scene_to_json(scene);
+  start.grains = btr::run_scene(btr_scene, seed, btr_scene.grains.count, {}).grains;
+  const json scene_json = btr::scene_to_json(btr_scene);
   start.meta = scene_packing_meta(scene, start.grains, seed, "shake");
   btr::make_tap_plan(start, scene, ts, o.engine);  // refuses a scene it cannot tap before any engine runs
 
@@ -57,16 +58,16 @@ int run_shake_dem(const ShakeOptions& o, const CLI::App& cmd, const btr::Scene& 
   const btr::TapResult tapped =
       btr::run_tapping(relaxed.relaxed, scene, *adapter, o.engine, ts, plan, (out / "tap").string());
 
-  const double d_small = bed_grain_diameter(relaxed.relaxed.grains, scene);
+  const double d_small = bed_grain_diameter(relaxed.relaxed.grains, btr_scene);
   SeriesWriter series(o.out, name, "cycle");
   std::string table = kCycleHeader;
   const long n_taps = static_cast<long>(tapped.taps.size());
   for (long c = 0; c <= n_taps; ++c) {
     const btr::Grains& grains = c == 0 ? relaxed.relaxed.grains : tapped.taps[c - 1].grains;
     const double seconds = relaxed.cpu_seconds + (c == 0 ? 0.0 : tapped.cpu_seconds[c - 1]);
-    table += cycle_row_text(measure_cycle(c, seconds, grains, scene, d_small), d_small);
+    table += cycle_row_text(measure_cycle(c, seconds, grains, btr_scene, d_small), d_small);
     if (c % every == 0 || c == n_taps) {
-      json meta = snapshot_meta("shake", scene, scene_json, seed, grains.size());
+      json meta = snapshot_meta("shake", btr_scene, scene_json, seed, grains.size());
       meta["cycle"] = c;
       meta["engine"] = o.engine;
       meta["simulated_time"] = c == 0 ? 0.0 : tapped.taps[c - 1].rested_time;

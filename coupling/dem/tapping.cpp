@@ -13,6 +13,18 @@
 
 namespace btr {
 
+Scene engine_scene(const Scene& scene) {
+  Scene out = scene;
+  if (!scene.intruder || scene.grains.components.empty()) return out;
+  for (const Component& c : scene.grains.components)
+    if (c.species == scene.intruder->species) return out;
+  Component intruder = scene.grains.components.front();
+  intruder.species = scene.intruder->species;
+  intruder.fraction = 0.0;
+  out.grains.components.push_back(intruder);
+  return out;
+}
+
 double tap_amplitude(double gamma, double frequency) {
   const double omega = 2.0 * M_PI * frequency;
   return gamma * kGravity / (omega * omega);
@@ -81,6 +93,7 @@ TapResult run_tapping(const Packing& start, const Scene& scene, const EngineAdap
   out.plan = plan;
   out.run = run_and_read_back(start, scene, adapter, engine, rs, plan, dir, "tapping");
   out.taps = adapter.read_taps(dir, start, plan);
+  write_run_tables(out.run, dir);
 
   const std::vector<DemWall> walls = dem_walls(scene.container, scene.dimension);
   for (TapSnapshot& t : out.taps)

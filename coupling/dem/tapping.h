@@ -18,6 +18,11 @@ struct TapSettings {
   double wall_time_limit = 3600.0;  // s; the engine run is killed past this
 };
 
+// The scene as the engines run a shaken bed: an intruder (its species, the bed's + 1, is no component of the
+// scene) becomes a component of the first component's material and density (fraction 0: it draws no grains), so
+// that the engines' writers give it a type. Other scenes are returned unchanged.
+Scene engine_scene(const Scene& scene);
+
 // Amplitude A [m] of a tap of peak acceleration gamma g at `frequency` [Hz]: A = gamma g / (2 pi f)^2.
 double tap_amplitude(double gamma, double frequency);
 

@@ -68,7 +68,7 @@ friction = 0.5
 
 [relax]
 model = "hertz"
-max_time = 0.1
+max_time = 0.3
 stop_kinetic_ratio = 1e-6
 timestep_fraction = 0.2
 
