@@ -44,7 +44,7 @@ int run(const Options& o, const CLI::App& cmd) {
   scene.seed = seed;
   if (cmd.count("--cycles")) scene.shaking->cycles = o.cycles;
   if (!o.engine.empty()) return run_shake_dem(o, cmd, scene, seed);
-  for (const char* dem_only : {"--np", "--time-limit", "--taps"})
+  for (const char* dem_only : {"--np", "--time-limit", "--taps", "--rest-time"})
     if (cmd.count(dem_only))
       throw btr::SceneError(std::string(dem_only) + ": only with --engine (DEM tapping); dynamic BTR has no engine");
   const btr::ShakingSpec sh = *scene.shaking;
@@ -115,6 +115,11 @@ Runner add_shake_command(CLI::App& app) {
   cmd->add_option("--engine", o->engine, "liggghts: DEM tapping instead of dynamic BTR (default: dynamic BTR)")
       ->check(CLI::IsMember({"liggghts"}));
   cmd->add_option("--taps", o->taps, "--engine: number of taps (default: [shaking].cycles)")->check(positive_integer());
+  cmd->add_option("--rest-time", o->rest_time,
+                  "--engine: longest rest after a tap [simulated s]; a rest ends sooner once the kinetic energy is "
+                  "below the relaxation's threshold at two checks in a row")
+      ->capture_default_str()
+      ->check(positive_number());
   cmd->add_option("--np", o->np, "--engine: MPI ranks (mpirun -np N)")->check(positive_integer());
   cmd->add_option("--time-limit", o->time_limit, "--engine: wall-time limit of each engine run [s]")
       ->capture_default_str()

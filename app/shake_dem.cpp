@@ -36,6 +36,7 @@ int run_shake_dem(const ShakeOptions& o, const CLI::App& cmd, const btr::Scene& 
   ts.taps = cmd.count("--taps") ? static_cast<long>(o.taps) : static_cast<long>(scene.shaking->cycles);
   ts.np = o.np;
   ts.wall_time_limit = o.time_limit;
+  ts.max_rest_time = o.rest_time;
   const std::int64_t every = scene.shaking->snapshot_every;
 
   // The BTR packing of dynamic BTR's run: same scene, grains, intruder and seed.

@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 
 #include "btr/scene/scene.h"
+#include "coupling/dem/tapping.h"
 
 namespace btr_app {
 
@@ -15,6 +16,7 @@ struct ShakeOptions {
   std::int64_t cycles = 0, taps = 0;
   int np = 1;
   double time_limit = 3600.0;
+  double rest_time = btr::kDefaultTapRestTime;  // s
   bool check = false, quiet = false;
 };
 

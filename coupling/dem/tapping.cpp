@@ -41,6 +41,8 @@ RelaxPlan make_tap_plan(const Packing& start, const Scene& scene, const TapSetti
   for (const Grain& g : start.grains)
     if (g.cluster != 0) throw RelaxRefused("tapping: grains in rigid clusters are not tapped");
   if (settings.taps < 1) throw RelaxRefused("--taps: expected at least 1 tap, got " + std::to_string(settings.taps));
+  if (!(settings.max_rest_time > 0.0) || !std::isfinite(settings.max_rest_time))
+    throw RelaxRefused("--rest-time: expected a positive time [s], got " + g6(settings.max_rest_time));
 
   Scene calm = scene;  // the relaxation's rules without what would change the tapping's dynamics
   calm.relax.target_phi.reset();
@@ -71,10 +73,11 @@ RelaxPlan make_tap_plan(const Packing& start, const Scene& scene, const TapSetti
     mass += grain_mass(g.r, scene.grains.components[component_index(scene, g.species)].density);
   const double v_peak = tap.amplitude * 2.0 * M_PI * tap.frequency;
   tap.energy_input = 2.0 * mass * (0.5 * (2.0 * v_peak) * (2.0 * v_peak) + kGravity * tap.amplitude);
-  // The rest: the relaxation's check window; at most relax.max_time of rest per tap.
+  // The rest: windows of the relaxation's check window, at most max_rest_time in all.
   const CheckSchedule sched = check_schedule(start.grains, calm, plan);
   tap.steps_per_check = sched.steps_per_check;
-  tap.max_rest_checks = std::max(1L, sched.max_checks - 1);
+  const double window = static_cast<double>(tap.steps_per_check) * plan.timestep;
+  tap.max_rest_checks = std::max(1L, static_cast<long>(std::ceil(settings.max_rest_time / window - 1e-9)) - 1);
   return plan;
 }
 

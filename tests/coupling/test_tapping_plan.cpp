@@ -49,8 +49,12 @@ TEST(TappingPlan, WholeStepsPerPeriodNoFasterThanTheRuleAndTheScenesValues) {
   EXPECT_NE(plan.timestep_rule.find("lowered to the tap period"), std::string::npos) << plan.timestep_rule;
   EXPECT_GE(t.steps_per_check, 1000);
   EXPECT_GE(t.max_rest_checks, 1);
-  // at most relax.max_time of rest per tap (one window of rounding)
-  EXPECT_LE((t.max_rest_checks + 1) * t.steps_per_check * plan.timestep, 0.2 + t.steps_per_check * plan.timestep);
+  // the longest rest is the default rest time, to within one window
+  const double window = t.steps_per_check * plan.timestep;
+  EXPECT_NEAR((t.max_rest_checks + 1) * window, kDefaultTapRestTime, window);
+  TapSettings short_rest = ts;
+  short_rest.max_rest_time = 0.05;
+  EXPECT_LT(make_tap_plan(p, s, short_rest, "liggghts").tap.max_rest_checks, t.max_rest_checks);
   EXPECT_GT(t.energy_input, 0.0);
   EXPECT_EQ(plan.damping, 0.0);
   EXPECT_FALSE(plan.compaction.enabled);
@@ -79,6 +83,9 @@ TEST(TappingPlan, RefusalsNameTheField) {
   TapSettings none;
   none.taps = 0;
   EXPECT_THROW(make_tap_plan(p, s, none, "liggghts"), RelaxRefused);
+  TapSettings no_rest;
+  no_rest.max_rest_time = 0.0;
+  EXPECT_THROW(make_tap_plan(p, s, no_rest, "liggghts"), RelaxRefused);
   s.shaking.reset();
   try {
     make_tap_plan(p, s, TapSettings{}, "liggghts");
