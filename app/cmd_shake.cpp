@@ -1,24 +1,22 @@
 // `btr shake SCENE.toml -o OUTDIR`: dynamic BTR by shaking (seed 001 section 6.6). The scene's
 // packing is built with the BTR engine, then shaken [shaking].cycles times; every snapshot_every
 // cycles (and at cycle 0 and the last) OUTDIR/NAME_cNNNNNN.{csv,json,vtp} is written, and
-// OUTDIR/NAME.pvd indexes them for ParaView; OUTDIR/NAME_cycles.csv has one row per cycle.
-#include <algorithm>
+// OUTDIR/NAME.pvd indexes them for ParaView; OUTDIR/NAME_cycles.csv has one row per cycle. With --engine the
+// DEM counterpart runs instead (shake_dem.h): the same packing relaxed and tapped, the same files and columns.
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <memory>
 
 #include "btr/dynamics/shaking.h"
-#include "btr/measures/metrics.h"
 #include "btr/placement/deposition.h"
 #include "btr/placement/run_scene.h"
 #include "btr/scene/scene_toml.h"
 #include "command_support.h"
 #include "commands.h"
-#include "engine_command.h"
 #include "coupling/io/atomic_file.h"
 #include "coupling/io/scene_json.h"
+#include "engine_command.h"
 #include "progress.h"
 #include "series_files.h"
 #include "shake_cycles.h"
@@ -29,8 +27,6 @@ namespace btr_app {
 namespace {
 
 using nlohmann::json;
-
-
 using Options = ShakeOptions;
 
 int run(const Options& o, const CLI::App& cmd) {
