@@ -191,5 +191,20 @@ TEST_F(ShakeDemCli, BadGammaOrFrequencyIsRefusedNamingTheField) {
   EXPECT_NE(r.err.find("--taps"), std::string::npos) << r.err;
 }
 
+TEST_F(ShakeDemCli, AnEngineFailureIsExit5WithItsRecord) {
+  if (!btr_test::have_engine("liggghts")) FAIL() << "liggghts is not installed";
+  // Killed at a wall-time limit no relaxation can meet: exit 5, the failure record where the engine ran, and no
+  // series pretending to be a result.
+  const fs::path out = dir_ / "killed";
+  const CliRun r = btr("shake " + scene_file("killed", "") + " -o " + out.string() +
+                       " --engine liggghts --taps 1 --time-limit 0.02");
+  EXPECT_EQ(r.code, 5) << r.out << r.err;
+  EXPECT_NE(r.err.find("wall-time limit"), std::string::npos) << r.err;
+  const nlohmann::json failure = nlohmann::json::parse(slurp(out / "relax" / "relax_failure.json"));
+  EXPECT_EQ(failure["kind"], "time_limit");
+  EXPECT_FALSE(fs::exists(out / "killed_cycles.csv"));
+  EXPECT_FALSE(fs::exists(out / "shake_dem.json"));
+}
+
 }  // namespace
 }  // namespace btr
