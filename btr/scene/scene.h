@@ -108,8 +108,8 @@ struct ShakingSpec {
   std::optional<double> gamma;      // dimensionless, in (0, kMaxTapGamma]
   std::optional<double> frequency;  // Hz, in (0, kMaxTapFrequency]
 };
-// Defaults of the tap: Gamma 3 and 30 Hz single-cycle taps, as in the tapping experiments of Knight, Jaeger and
-// Nagel (1993) on the Brazil nut (docs/guide/shake_dem.md gives the reasons).
+// Defaults of the tap: Gamma 3 and 30 Hz single-cycle taps, after the tapping experiments of Knight, Jaeger and
+// Nagel on the Brazil nut and compaction (docs/guide/shake_dem.md gives the reasons).
 inline constexpr double kDefaultTapGamma = 3.0;
 inline constexpr double kDefaultTapFrequency = 30.0;
 inline constexpr double kMaxTapGamma = 100.0;
