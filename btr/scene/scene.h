@@ -103,7 +103,17 @@ struct ShakingSpec {
   double lift = 0.0;                // m
   double noise = 0.0;               // amplitude a [m]; 0 = the deterministic model
   std::int64_t snapshot_every = 0;  // cycles between snapshots (the initial and last are always written)
+  // DEM tapping only (btr shake --engine, docs/guide/shake_dem.md): the floor's tap z = A sin(2 pi f t) over one
+  // period, with peak acceleration gamma g = A (2 pi f)^2. Unset: kDefaultTapGamma, kDefaultTapFrequency.
+  std::optional<double> gamma;      // dimensionless, in (0, kMaxTapGamma]
+  std::optional<double> frequency;  // Hz, in (0, kMaxTapFrequency]
 };
+// Defaults of the tap: Gamma 3 and 30 Hz single-cycle taps, after the tapping experiments of Knight, Jaeger and
+// Nagel on the Brazil nut and compaction (docs/guide/shake_dem.md gives the reasons).
+inline constexpr double kDefaultTapGamma = 3.0;
+inline constexpr double kDefaultTapFrequency = 30.0;
+inline constexpr double kMaxTapGamma = 100.0;
+inline constexpr double kMaxTapFrequency = 10000.0;
 
 // Dynamic BTR in a rotating drum (seed 000 section 6): per step, rotate every grain with the drum by
 // 2 pi / steps_per_revolution about its axis, lift every grain by `lift`, redeposit them lowest first.

@@ -124,7 +124,7 @@ class SceneParser {
   void parse_shaking() {
     auto s = rd_.table(root_, "shaking", "[shaking]");
     if (!s) return;
-    rd_.check_keys(*s, {"cycles", "lift", "noise", "snapshot_every"});
+    rd_.check_keys(*s, {"cycles", "lift", "noise", "snapshot_every", "gamma", "frequency"});
     ShakingSpec sh;
     auto cycles = rd_.integer(*s, "cycles", [](std::int64_t v) { return v > 0; }, "a positive number of cycles");
     if (!cycles) rd_.missing(*s, "cycles", "a positive number of cycles");
@@ -134,6 +134,10 @@ class SceneParser {
     sh.snapshot_every = rd_.integer(*s, "snapshot_every", [](std::int64_t v) { return v > 0; },
                                     "a positive number of cycles")
                             .value_or(sh.cycles);
+    sh.gamma = rd_.number(*s, "gamma", [](double v) { return v > 0.0 && v <= kMaxTapGamma; },
+                          "a peak acceleration Gamma = A (2 pi f)^2 / g in (0, 100] (DEM tapping)");
+    sh.frequency = rd_.number(*s, "frequency", [](double v) { return v > 0.0 && v <= kMaxTapFrequency; },
+                              "a tap frequency in (0, 10000] Hz (DEM tapping)");
     scene_.shaking = sh;
   }
 

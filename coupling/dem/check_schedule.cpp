@@ -25,7 +25,7 @@ CheckSchedule check_schedule(const Grains& grains, const Scene& scene, const Rel
   s.average_every = window / kAveragedSamples;
   s.max_checks = std::max(1L, (total + window - 1) / window);
   s.arming_time = plan.arming_time > 0.0 ? plan.arming_time : stop_arming_time(grains);
-  s.blowup_bound = kinetic_energy_bound(grains, scene);
+  s.blowup_bound = kinetic_energy_bound(grains, scene) + (plan.tap.enabled ? plan.tap.energy_input : 0.0);
   return s;
 }
 

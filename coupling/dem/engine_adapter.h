@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "coupling/dem/relax.h"
+#include "coupling/dem/tap_schedule.h"
 
 namespace btr {
 
@@ -75,6 +76,7 @@ struct RelaxPlan {
   double region_lo[2] = {0.0, 0.0}, region_hi[2] = {0.0, 0.0};
   CompactionPlan compaction;  // enabled only with a target packing fraction
   PourRelease pour;           // enabled only for a reference pour (pour.h)
+  TapSchedule tap;            // enabled only for DEM tapping (tapping.h); replaces the stop rule
 };
 
 // The threshold of the plan's stop rule: J (kinetic-energy), a ratio (unbalanced-force) or m (displacement).
@@ -109,6 +111,13 @@ class EngineAdapter {
                                                           const Scene& scene, const RelaxPlan& plan) const {
     (void)dir, (void)original, (void)scene, (void)plan;
     return std::nullopt;
+  }
+  // Tapping (plan.tap): the grains and numbers after each tap of the run in dir, in tap order. Throws
+  // EngineFailure for a missing or bad per-tap output, std::runtime_error if the engine does not tap.
+  virtual std::vector<TapSnapshot> read_taps(const std::string& dir, const Packing& original,
+                                             const RelaxPlan& plan) const {
+    (void)dir, (void)original, (void)plan;
+    throw std::runtime_error("this engine has no DEM tapping");
   }
 };
 

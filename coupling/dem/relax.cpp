@@ -401,7 +401,7 @@ RelaxResult run_and_read_back(const Packing& packing, const Scene& scene, const 
         throw failure(FailureKind::NonFinite, "grain " + std::to_string(i + 1) + " has a non-finite velocity",
                       {{"grain", i + 1}});
   }
-  const double bound = kinetic_energy_bound(in, scene);
+  const double bound = kinetic_energy_bound(in, scene) + (plan.tap.enabled ? plan.tap.energy_input : 0.0);
   for (const auto& [t, e] : res.kinetic_history) {
     if (!std::isfinite(e))
       throw failure(FailureKind::NonFinite, "kinetic energy " + g6(e) + " J at t = " + g6(t) + " s",

@@ -195,6 +195,8 @@ json scene_to_json(const Scene& s) {
                       {"lift", s.shaking->lift},
                       {"noise", s.shaking->noise},
                       {"snapshot_every", s.shaking->snapshot_every}};
+  if (s.shaking && s.shaking->gamma) out["shaking"]["gamma"] = *s.shaking->gamma;
+  if (s.shaking && s.shaking->frequency) out["shaking"]["frequency"] = *s.shaking->frequency;
   return out;
 }
 
@@ -402,12 +404,14 @@ Scene scene_from_json(const json& j, const std::string& origin) {
     s.drum = spec;
   }
   if (j.contains("shaking")) {
-    const json& sh = rd.object(j, "", "shaking", {"cycles", "lift", "noise", "snapshot_every"});
+    const json& sh = rd.object(j, "", "shaking", {"cycles", "lift", "noise", "snapshot_every", "gamma", "frequency"});
     ShakingSpec spec;
     spec.cycles = rd.integer(sh, "shaking", "cycles");
     spec.lift = rd.number(sh, "shaking", "lift");
     spec.noise = rd.number(sh, "shaking", "noise");
     spec.snapshot_every = rd.integer(sh, "shaking", "snapshot_every");
+    if (sh.contains("gamma")) spec.gamma = rd.number(sh, "shaking", "gamma");
+    if (sh.contains("frequency")) spec.frequency = rd.number(sh, "shaking", "frequency");
     s.shaking = spec;
   }
   if (auto p = scene_value_problem(s, FieldNames::Json)) rd.fail(p->field, p->message.substr(p->field.size() + 1));

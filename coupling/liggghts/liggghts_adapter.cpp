@@ -7,6 +7,7 @@
 #include "coupling/dem/relax_plan.h"
 #include "coupling/liggghts/liggghts_readback.h"
 #include "coupling/liggghts/liggghts_script.h"
+#include "coupling/liggghts/liggghts_tapping.h"
 
 namespace btr {
 
@@ -40,7 +41,8 @@ class LiggghtsAdapter : public EngineAdapter {
     // LIGGGHTS 3.8's STL reader (fix mesh/surface) prints to the screen without checking that there is
     // one: with "-screen none" it crashes. A mesh container's run (its inputs hold the mesh) gets a screen
     // file instead.
-    const bool mesh = std::filesystem::exists(std::filesystem::path(dir) / kLiggghtsMesh);
+    const bool mesh = std::filesystem::exists(std::filesystem::path(dir) / kLiggghtsMesh) ||
+                      std::filesystem::exists(std::filesystem::path(dir) / kLiggghtsTapFloor);
     for (const char* a : {"liggghts", "-in", kLiggghtsScript, "-log", kLiggghtsLog, "-screen", mesh ? kLiggghtsScreen : "none",
                           "-echo", "none"})
       c.argv.push_back(a);
@@ -64,6 +66,11 @@ class LiggghtsAdapter : public EngineAdapter {
     const LiggghtsLog log = parse_liggghts_log(path);
     if (log.failure.empty()) return std::nullopt;
     return EngineFailure(log.failure_kind, path + ": " + log.failure, log.failure_values);
+  }
+
+  std::vector<TapSnapshot> read_taps(const std::string& dir, const Packing& original,
+                                     const RelaxPlan& plan) const override {
+    return read_liggghts_taps(dir, original, plan);
   }
 };
 

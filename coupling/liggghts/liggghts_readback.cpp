@@ -1,5 +1,6 @@
 #include "coupling/liggghts/liggghts_readback.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -9,6 +10,7 @@
 
 #include "coupling/dem/dem_walls.h"
 #include "coupling/liggghts/liggghts_script.h"
+#include "coupling/liggghts/liggghts_tapping.h"
 
 namespace btr {
 
@@ -264,6 +266,67 @@ RelaxResult read_liggghts_result(const std::string& dir, const Packing& original
     res.contacts.push_back({a, b, std::sqrt(row[3] * row[3] + row[4] * row[4] + row[5] * row[5])});
   }
   return res;
+}
+
+std::vector<TapSnapshot> read_liggghts_taps(const std::string& dir, const Packing& original, const RelaxPlan& plan) {
+  namespace fs = std::filesystem;
+  const std::string log_path = (fs::path(dir) / kLiggghtsLog).string();
+  const long n_taps = plan.tap.taps;
+  std::vector<TapSnapshot> taps(static_cast<std::size_t>(std::max(0L, n_taps)));
+  std::vector<char> moved(taps.size(), 0), rested(taps.size(), 0);
+  std::ifstream in(log_path);
+  if (!in) fail(log_path, "missing: LIGGGHTS wrote no log");
+  std::string line;
+  // "BTR-TAP-MOVED k t = T kinetic = E", "BTR-TAP-RESTED k settled|max-rest t = T kinetic = E step = S"
+  while (std::getline(in, line)) {
+    const bool is_moved = line.rfind("BTR-TAP-MOVED ", 0) == 0, is_rested = line.rfind("BTR-TAP-RESTED ", 0) == 0;
+    if (!is_moved && !is_rested) continue;
+    const auto w = split(line);
+    double k = 0, t = NAN, e = NAN, step = NAN;
+    if (w.size() < 2 || !to_double(w[1], k) || k < 1 || k > n_taps || k != std::floor(k))
+      fail(log_path, "unexpected tap line: " + line);
+    for (std::size_t i = 0; i + 2 < w.size(); ++i) {
+      if (w[i + 1] != "=") continue;
+      if (w[i] == "t") to_double(w[i + 2], t);
+      else if (w[i] == "kinetic") to_double(w[i + 2], e);
+      else if (w[i] == "step") to_double(w[i + 2], step);
+    }
+    if (!std::isfinite(t) || !std::isfinite(e) || (is_rested && !std::isfinite(step)))
+      fail(log_path, "non-finite or missing numbers in: " + line, FailureKind::NonFinite, {{"log_line", line}});
+    const std::size_t i = static_cast<std::size_t>(k) - 1;
+    TapSnapshot& snap = taps[i];
+    snap.tap = static_cast<long>(k);
+    if (is_moved) {
+      snap.moved_time = t, snap.moved_kinetic = e, moved[i] = 1;
+    } else {
+      snap.rested_time = t, snap.rested_kinetic = e, snap.step = static_cast<long>(step), rested[i] = 1;
+      snap.settled = w.size() > 2 && w[2] == "settled";
+    }
+  }
+  const std::size_t n = original.grains.size();
+  for (std::size_t i = 0; i < taps.size(); ++i) {
+    if (!moved[i] || !rested[i])
+      fail(log_path, "tap " + std::to_string(i + 1) + " of " + std::to_string(n_taps) + " did not end (no BTR-TAP-" +
+                         (moved[i] ? "RESTED" : "MOVED") + " line)");
+    const std::string path = (fs::path(dir) / liggghts_tap_dump(static_cast<long>(i) + 1)).string();
+    const Dump atoms = read_dump(path);
+    if (atoms.rows.size() != n)
+      fail(path, "lost atoms: " + std::to_string(atoms.rows.size()) + " grains of " + std::to_string(n),
+           FailureKind::LostGrains, {{"grains", n}, {"returned", atoms.rows.size()}});
+    const int c_id = atoms.column("id", path), c_x = atoms.column("x", path), c_y = atoms.column("y", path),
+              c_z = atoms.column("z", path);
+    Grains& grains = taps[i].grains;
+    grains = original.grains;
+    std::vector<char> seen(n, 0);
+    for (const auto& row : atoms.rows) {
+      const double idv = row[c_id];
+      if (idv < 1 || idv > static_cast<double>(n) || idv != std::floor(idv) || seen[static_cast<std::size_t>(idv) - 1])
+        fail(path, "unexpected or repeated grain id " + std::to_string(idv));
+      seen[static_cast<std::size_t>(idv) - 1] = 1;
+      grains[static_cast<std::size_t>(idv) - 1].x = Vec3(row[c_x], row[c_y], row[c_z]);
+    }
+  }
+  return taps;
 }
 
 }  // namespace btr

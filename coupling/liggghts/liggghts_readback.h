@@ -33,4 +33,9 @@ LiggghtsLog parse_liggghts_log(const std::string& path);
 RelaxResult read_liggghts_result(const std::string& dir, const Packing& original, const Scene& scene,
                                  const RelaxPlan& plan);
 
+// Tapping (plan.tap): the grains of dir/btr_tap_<k>.dump and the log's BTR-TAP-MOVED / BTR-TAP-RESTED lines of
+// each tap k = 1..plan.tap.taps (liggghts_tapping.h). Throws EngineFailure for a missing tap, a missing or bad
+// dump, or ids that are not the input's.
+std::vector<TapSnapshot> read_liggghts_taps(const std::string& dir, const Packing& original, const RelaxPlan& plan);
+
 }  // namespace btr

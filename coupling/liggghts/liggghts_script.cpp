@@ -22,6 +22,7 @@
 #include "coupling/io/atomic_file.h"
 #include "coupling/io/mesh_stl.h"
 #include "coupling/liggghts/liggghts_compaction.h"
+#include "coupling/liggghts/liggghts_tapping.h"
 
 namespace btr {
 
@@ -91,6 +92,7 @@ SimulationBox make_box(const Grains& grains, int dimension, const Container& c, 
   // The floor is the lower boundary; the top is shrink-wrapped (grains may rise) from a start above
   // the highest grain.
   set(2, 0.0, hi[2] + 2.0 * r_max);
+  if (plan.tap.enabled) b.lo[2] = -2.0 * plan.tap.amplitude;  // the tapped floor goes down to -amplitude
   // A mesh's nodes must lie inside the box (LIGGGHTS refuses a mesh that leaves it).
   if (c.kind == ContainerKind::Mesh) set(2, -1e-6 * c.mesh->hi.z(), std::max(b.hi[2], c.mesh->hi.z() * (1 + 1e-6)));
   b.boundary = bx + " " + by + " fm";
@@ -437,6 +439,12 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
         << " mesh n_meshes 1 meshes btr_mesh store_force yes\n";
       continue;
     }
+    if (plan.tap.enabled && w.name == "floor") {  // a mesh that the taps move (liggghts_tapping.h)
+      s << liggghts_tap_floor(box.lo[0], box.hi[0], box.lo[1], box.hi[1], types.wall_type, models,
+                              liggghts_wall_id(w.name), dir);
+      written.push_back((fs::path(dir) / kLiggghtsTapFloor).string());
+      continue;
+    }
     s << "fix " << liggghts_wall_id(w.name) << " all wall/gran " << models << " primitive type " << types.wall_type
       << " " << wall_geometry(w) << " store_force yes\n";
   }
@@ -543,7 +551,16 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   if (pour.enabled) s << liggghts_release(pour);
   if (compaction.enabled)
     s << liggghts_compaction_loop(compaction, grains, scene, plan.damping, plan.timestep, stop_arming_time(grains));
-  s << "label btr_loop\n"
+  std::vector<std::string> cols{"id", "x", "y", "z", "vx", "vy", "vz"};
+  for (const DemWall& w : walls)
+    for (const std::string& c : wall_force_columns(w)) cols.push_back(c);
+  std::string names, format = "%d";
+  for (const std::string& c : cols) names += " " + c;
+  for (std::size_t i = 1; i < cols.size(); ++i) format += " %.17g";
+  if (plan.tap.enabled)  // the taps replace the stop rule (liggghts_tapping.h)
+    s << liggghts_tap_loop(plan.tap, names, format);
+  else
+    s << "label btr_loop\n"
     << "variable btr_check loop " << sched.max_checks << "\n"
     << "run " << sched.steps_per_check << " pre no post no\n"
     << "if \"${btr_ekin} > ${btr_bound}\" then &\n"
@@ -557,15 +574,9 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
     << "jump SELF btr_output\n"
     << "label btr_converged\n"
     << "print \"BTR-STOP " << plan.stop_rule << " t = ${btr_time} s value = " << value << "\"\n"
-    << "label btr_output\n"
-    << "print \"BTR-FINAL unbalanced-force ${btr_unbalanced} atoms ${btr_atoms}\"\n\n";
+    << "label btr_output\n";
+  s << "print \"BTR-FINAL unbalanced-force ${btr_unbalanced} atoms ${btr_atoms}\"\n\n";
 
-  std::vector<std::string> cols{"id", "x", "y", "z", "vx", "vy", "vz"};
-  for (const DemWall& w : walls)
-    for (const std::string& c : wall_force_columns(w)) cols.push_back(c);
-  std::string names, format = "%d";
-  for (const std::string& c : cols) names += " " + c;
-  for (std::size_t i = 1; i < cols.size(); ++i) format += " %.17g";
   s << "write_dump all custom " << kLiggghtsFinalDump << names << " modify sort id format \"" << format << "\"\n"
     << "write_dump all local " << kLiggghtsContactsDump
     << " c_btr_pairs[1] c_btr_pairs[2] c_btr_pairs[3] c_btr_pairs[7] c_btr_pairs[8] c_btr_pairs[9] c_btr_pairs[10]"

@@ -280,5 +280,24 @@ TEST(ShakerContainers, EveryContainerStaysValid) {
   }
 }
 
+TEST_F(ShakenScene, TapGammaAndFrequencyAreOptionalAndChecked) {
+  const Scene plain = scene(kNut);
+  EXPECT_FALSE(plain.shaking->gamma);  // unset: the tapping's defaults apply
+  EXPECT_FALSE(plain.shaking->frequency);
+  const Scene set = scene(std::string(kNut) + "gamma = 2.5\nfrequency = 45\n");
+  ASSERT_TRUE(set.shaking->gamma && set.shaking->frequency);
+  EXPECT_EQ(*set.shaking->gamma, 2.5);
+  EXPECT_EQ(*set.shaking->frequency, 45.0);
+  for (const char* bad : {"gamma = 0.0\n", "gamma = -1.0\n", "gamma = 101.0\n", "gamma = \"3\"\n"}) {
+    const std::string e = error_of(std::string(kNut) + bad);
+    EXPECT_NE(e.find("s.toml"), std::string::npos) << e;
+    EXPECT_NE(e.find("shaking.gamma"), std::string::npos) << bad << ": " << e;
+  }
+  for (const char* bad : {"frequency = 0\n", "frequency = -30.0\n", "frequency = 2e4\n"}) {
+    const std::string e = error_of(std::string(kNut) + bad);
+    EXPECT_NE(e.find("shaking.frequency"), std::string::npos) << bad << ": " << e;
+  }
+}
+
 }  // namespace
 }  // namespace btr

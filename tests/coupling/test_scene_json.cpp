@@ -191,5 +191,22 @@ TEST(SceneJson, DrumEndsRoundTripAndDemExportIsRefused) {
   }
 }
 
+TEST(SceneJson, TapGammaAndFrequencyRoundTripAndAreWrittenOnlyWhenSet) {
+  Scene s = everything_set();
+  s.shaking = ShakingSpec{};
+  s.shaking->cycles = 5;
+  s.shaking->lift = 1e-3;
+  s.shaking->snapshot_every = 1;
+  const nlohmann::json unset = scene_to_json(s);
+  EXPECT_FALSE(unset["shaking"].contains("gamma"));  // dynamic BTR's records stay as they were
+  EXPECT_FALSE(scene_from_json(unset, "test").shaking->gamma);
+  s.shaking->gamma = 2.5;
+  s.shaking->frequency = 1.0 / 3.0;
+  const Scene t = scene_from_json(nlohmann::json::parse(scene_to_json(s).dump(2)), "test");
+  ASSERT_TRUE(t.shaking && t.shaking->gamma && t.shaking->frequency);
+  EXPECT_EQ(*t.shaking->gamma, 2.5);
+  EXPECT_EQ(*t.shaking->frequency, 1.0 / 3.0);
+}
+
 }  // namespace
 }  // namespace btr

@@ -1,0 +1,210 @@
+// `btr shake --engine liggghts` as a user runs it: a tiny Brazil-nut scene (120 grains and an intruder in a
+// periodic cell) relaxed and tapped twice for real in LIGGGHTS: the files of dynamic BTR's run with the same
+// columns, ids kept, the floor moved and the grains with it, nobody below the floor, the record; and the refusals
+// of bad [shaking] gamma / frequency (exit 2, naming the file and the field).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include "cli_run.h"
+#include "coupling/io/packing_io.h"
+#include "relax_fixtures.h"
+
+namespace btr {
+namespace {
+namespace fs = std::filesystem;
+
+class ShakeDemCli : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = fs::temp_directory_path() / ("btr_shake_dem_cli_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  static void TearDownTestSuite() { fs::remove_all(dir_); }
+
+  static CliRun btr(const std::string& args) { return run_btr(args, dir_); }
+
+  // A scene file in the scratch folder: the tiny Brazil nut with `shaking_extra` appended to [shaking].
+  static std::string scene_file(const std::string& name, const std::string& shaking_extra) {
+    const fs::path p = dir_ / (name + ".toml");
+    std::ofstream(p) << "[scene]\nname = \"" << name << "\"\ndimension = 3\nseed = 3\n" << kTinyNut << shaking_extra;
+    return p.string();
+  }
+
+  static fs::path dir_;
+  static const char* kTinyNut;
+};
+
+fs::path ShakeDemCli::dir_;
+
+// 120 grains of radius 0.5 mm and an intruder of diameter ratio 3 in a periodic cell 6 mm x 6 mm.
+const char* ShakeDemCli::kTinyNut = R"([grains]
+count = 120
+density = 2500.0
+radius = { distribution = "constant", value = 0.5e-3 }
+
+[container]
+kind = "periodic"
+size = [0.006, 0.006]
+
+[source]
+kind = "rain"
+
+[intruder]
+diameter_ratio = 3.0
+position = [0.0, 0.0]
+
+[material]
+young = 5e6
+poisson = 0.3
+restitution = 0.5
+friction = 0.5
+
+[relax]
+model = "hertz"
+max_time = 0.3
+stop_kinetic_ratio = 1e-6
+timestep_fraction = 0.2
+
+[shaking]
+cycles = 2
+lift = 1.0e-3
+noise = 0.1e-3
+snapshot_every = 1
+)";
+
+std::vector<std::vector<std::string>> read_csv(const fs::path& p, std::string& header) {
+  std::ifstream in(p);
+  std::getline(in, header);
+  std::vector<std::vector<std::string>> rows;
+  std::string line;
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    std::stringstream s(line);
+    std::string c;
+    while (std::getline(s, c, ',')) cells.push_back(c);
+    rows.push_back(cells);
+  }
+  return rows;
+}
+
+TEST_F(ShakeDemCli, TinyBrazilNutTappedTwiceInLiggghts) {
+  if (!btr_test::have_engine("liggghts")) FAIL() << "liggghts is not installed";
+  const std::string scene = scene_file("nut", "gamma = 2.5\nfrequency = 40.0\n");
+  const fs::path btr_out = dir_ / "btr", dem_out = dir_ / "dem";
+  const CliRun b = btr("shake " + scene + " -o " + btr_out.string() + " --quiet");
+  ASSERT_EQ(b.code, 0) << b.err;
+  const CliRun r = btr("shake " + scene + " -o " + dem_out.string() + " --engine liggghts --taps 2");
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+
+  // The same files as dynamic BTR's run, and the same table columns.
+  for (const char* f : {"nut_c000000.csv", "nut_c000001.json", "nut_c000002.vtp", "nut.pvd", "nut_cycles.csv",
+                        "shake_dem.json"})
+    EXPECT_TRUE(fs::exists(dem_out / f)) << f;
+  std::string btr_header, dem_header;
+  read_csv(btr_out / "nut_cycles.csv", btr_header);
+  const auto rows = read_csv(dem_out / "nut_cycles.csv", dem_header);
+  EXPECT_EQ(dem_header, btr_header);
+  ASSERT_EQ(rows.size(), 3u);
+  double previous_seconds = -1.0;
+  for (std::size_t c = 0; c < rows.size(); ++c) {
+    ASSERT_EQ(rows[c].size(), 7u);
+    EXPECT_EQ(std::stol(rows[c][0]), static_cast<long>(c));
+    const double seconds = std::stod(rows[c][1]), intruder_d = std::stod(rows[c][4]);
+    EXPECT_GT(seconds, previous_seconds) << "the engine's processor time so far grows, row " << c;
+    previous_seconds = seconds;
+    EXPECT_TRUE(std::isfinite(intruder_d)) << rows[c][4];
+    EXPECT_GT(intruder_d, 1.0) << "the intruder (3 d) rests with its centre above 1 d";  // centre >= 1.5 d
+  }
+
+  // Ids kept: the BTR packing's grains (cycle 0 of dynamic BTR), with the intruder as grain 1.
+  const Packing btr0 = read_packing((btr_out / "nut_c000000.csv").string());
+  const Packing rested = read_packing((dem_out / "nut_c000000.csv").string());
+  const Packing tapped = read_packing((dem_out / "nut_c000002.csv").string());
+  ASSERT_EQ(tapped.grains.size(), btr0.grains.size());
+  ASSERT_EQ(rested.grains.size(), btr0.grains.size());
+  double largest_move = 0.0;
+  for (std::size_t i = 0; i < tapped.grains.size(); ++i) {
+    const Grain& g = tapped.grains[i];
+    EXPECT_EQ(g.r, btr0.grains[i].r) << "grain " << i + 1;
+    EXPECT_EQ(g.species, btr0.grains[i].species) << "grain " << i + 1;
+    EXPECT_GT(g.x.z(), 0.9 * g.r) << "grain " << i + 1 << " is below the floor";
+    largest_move = std::max(largest_move, std::abs(g.x.z() - rested.grains[i].x.z()));
+  }
+  EXPECT_EQ(tapped.grains[0].r, 1.5e-3);  // the intruder
+  EXPECT_GT(largest_move, 1e-5) << "two taps moved no grain";
+
+  // The record: the scene's Gamma and frequency, the floor's amplitude, grains thrown up by each tap and at rest
+  // after it.
+  const nlohmann::json rec = nlohmann::json::parse(slurp(dem_out / "shake_dem.json"));
+  const nlohmann::json& t = rec["tapping"];
+  EXPECT_EQ(rec["engine"], "liggghts");
+  EXPECT_EQ(t["gamma"], 2.5);
+  EXPECT_EQ(t["frequency"], 40.0);
+  const double omega = 2.0 * M_PI * 40.0;
+  EXPECT_NEAR(t["amplitude"].get<double>(), 2.5 * 9.81 / (omega * omega), 1e-12);
+  EXPECT_NEAR(t["timestep"].get<double>() * t["steps_per_tap"].get<double>(), 1.0 / 40.0, 1e-12);
+  ASSERT_EQ(t["per_tap"].size(), 2u);
+  const double threshold = t["rest"]["kinetic_threshold"].get<double>();
+  for (const auto& tap : t["per_tap"]) {
+    EXPECT_GT(tap["moved_kinetic_energy"].get<double>(), 100.0 * threshold) << tap.dump();
+    EXPECT_TRUE(tap["settled"].get<bool>()) << tap.dump();
+    EXPECT_LT(tap["rested_kinetic_energy"].get<double>(), threshold) << tap.dump();
+    EXPECT_GT(tap["rest_time"].get<double>(), 0.0);
+    EXPECT_GT(tap["engine_cpu_seconds"].get<double>(), 0.0);
+  }
+  EXPECT_GT(t["engine_cpu_seconds"].get<double>(), 0.0);
+  EXPECT_GT(rec["relax"]["engine_cpu_seconds"].get<double>(), 0.0);
+  EXPECT_TRUE(fs::exists(dem_out / "tap" / "btr_tap_floor.stl"));
+  EXPECT_TRUE(fs::exists(dem_out / "relax" / "relaxed.csv"));
+}
+
+TEST_F(ShakeDemCli, BadGammaOrFrequencyIsRefusedNamingTheField) {
+  struct Case {
+    std::string extra, field;
+  };
+  const std::vector<Case> cases = {{"gamma = 0.0\n", "gamma"},
+                                   {"gamma = -2.0\n", "gamma"},
+                                   {"gamma = \"high\"\n", "gamma"},
+                                   {"frequency = 0\n", "frequency"},
+                                   {"frequency = 1e6\n", "frequency"}};
+  int k = 0;
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.extra);
+    const std::string scene = scene_file("bad" + std::to_string(k), c.extra);
+    const fs::path out = dir_ / ("bad_out" + std::to_string(k++));
+    const CliRun r = btr("shake " + scene + " -o " + out.string() + " --engine liggghts --taps 1");
+    EXPECT_EQ(r.code, 2) << r.out << r.err;
+    EXPECT_NE(r.err.find(scene), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("shaking." + c.field), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out / "shake_dem.json"));
+  }
+  // The engine's options without an engine: refused, naming the option.
+  const CliRun r = btr("shake " + scene_file("plain", "") + " -o " + (dir_ / "plain").string() + " --taps 3");
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("--taps"), std::string::npos) << r.err;
+}
+
+TEST_F(ShakeDemCli, AnEngineFailureIsExit5WithItsRecord) {
+  if (!btr_test::have_engine("liggghts")) FAIL() << "liggghts is not installed";
+  // Killed at a wall-time limit no relaxation can meet: exit 5, the failure record where the engine ran, and no
+  // series pretending to be a result.
+  const fs::path out = dir_ / "killed";
+  const CliRun r = btr("shake " + scene_file("killed", "") + " -o " + out.string() +
+                       " --engine liggghts --taps 1 --time-limit 0.02");
+  EXPECT_EQ(r.code, 5) << r.out << r.err;
+  EXPECT_NE(r.err.find("wall-time limit"), std::string::npos) << r.err;
+  const nlohmann::json failure = nlohmann::json::parse(slurp(out / "relax" / "relax_failure.json"));
+  EXPECT_EQ(failure["kind"], "time_limit");
+  EXPECT_FALSE(fs::exists(out / "killed_cycles.csv"));
+  EXPECT_FALSE(fs::exists(out / "shake_dem.json"));
+}
+
+}  // namespace
+}  // namespace btr
