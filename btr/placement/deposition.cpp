@@ -577,9 +577,13 @@ bool Deposition::Impl::roll_along_drum(Vec3& x, double r, Contacts& active, int 
   for (int chunk = 0; chunk < 1000; ++chunk) {
     candidates.clear();
     const Vec3 here = at(theta).first;
-    const Vec3 span = Vec3::Constant(reach + 20 * std::abs(step) * Rc);
+    // In x-z the centre stays on the drum's circle, within `travel` of here for the chunk's 20 steps.
+    const double travel = 20 * std::abs(step) * Rc;
+    const Vec3 span = Vec3::Constant(reach + travel);
     grid.visit_box(here - span, here + span, [&](std::int32_t i, const Vec3& c, double radius, int image) {
-      if (can_meet_on(p, c, r + radius)) candidates.push_back(sphere(i, c, radius, image, r));
+      const double dx = c.x() - here.x(), dz = c.z() - here.z(), near = (r + radius + travel) * (1.0 + 1e-9);
+      if (dx * dx + dz * dz < near * near && can_meet_on(p, c, r + radius))
+        candidates.push_back(sphere(i, c, radius, image, r));
     });
     for (int k = 0; k < 20; ++k) {
       if (condition(theta + step) == 0) {
