@@ -22,7 +22,8 @@ struct Products {
   }
 };
 
-// Tries one active subset: d = g + sum lambda_i n_i with n_i . d = 0 on the subset.
+// Tries one active subset: d = g + sum lambda_i n_i with n_i . d = 0 on the subset. Writes `out`, which
+// holds a fresh Descent, only when the subset is the answer.
 bool try_subset(const Vec3* n, const Products& p, std::size_t count, unsigned mask, Descent& out) {
   const Vec3 g(0.0, 0.0, -1.0);
   int idx[3];
@@ -58,7 +59,6 @@ bool try_subset(const Vec3* n, const Products& p, std::size_t count, unsigned ma
   }
   for (std::size_t i = 0; i < count; ++i)
     if (!(mask & (1u << i)) && n[i].dot(d) < -kFeasibleEps) return false;
-  out = Descent{};
   out.direction = d.norm() < 1e-12 ? Vec3::Zero() : d;
   for (int a = 0; a < k; ++a) {
     out.force[idx[a]] = lambda[a];
