@@ -16,7 +16,11 @@ DrumStepper::DrumStepper(int dimension, const Container& container, double lift)
 }
 
 Vec3 DrumStepper::rotate(const Vec3& x, double dphi) const {
-  const double za = container_.radius, c = std::cos(dphi), s = std::sin(dphi);
+  return rotate(x, std::cos(dphi), std::sin(dphi));
+}
+
+Vec3 DrumStepper::rotate(const Vec3& x, double c, double s) const {
+  const double za = container_.radius;
   const double px = x.x(), pz = x.z() - za;
   return Vec3(px * c - pz * s, x.y(), za + px * s + pz * c);
 }
@@ -24,9 +28,10 @@ Vec3 DrumStepper::rotate(const Vec3& x, double dphi) const {
 Grains DrumStepper::step(const Grains& grains, double dphi) const {
   Grains moved(grains.size());
   double r_max = 0.0;
+  const double c = std::cos(dphi), s = std::sin(dphi);
   for (std::size_t i = 0; i < grains.size(); ++i) {
     moved[i] = grains[i];
-    moved[i].x = rotate(grains[i].x, dphi);
+    moved[i].x = rotate(grains[i].x, c, s);
     // Round-off of the rotation must not put a grain touching the wall through it.
     const double half = container_.radius - grains[i].r;
     moved[i].x.x() = std::clamp(moved[i].x.x(), -half, half);
@@ -41,10 +46,20 @@ Grains DrumStepper::step(const Grains& grains, double dphi) const {
   Deposition engine(dimension_, container_, r_max);
   // Every grain is lifted by the same amount, so the order by height is the order after rotation; the
   // engine keeps each lifted start inside the drum.
-  for (std::size_t i : Shaker::height_order(moved)) {
-    const Grain& g = moved[i];
-    Drop d{g.x.x(), dimension_ == 3 ? g.x.y() : 0.0, g.r, g.species, g.x.z() + lift_};
-    out[i] = engine.place(d);
+  // The drops gathered in that order first: a loop of independent reads, where reading each grain
+  // between two placements waited for memory every time.
+  const std::vector<std::size_t> order = Shaker::height_order(moved);
+  std::vector<Drop> drops(order.size());
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const Grain& g = moved[order[k]];
+    drops[k] = Drop{g.x.x(), dimension_ == 3 ? g.x.y() : 0.0, g.r, g.species, g.x.z() + lift_};
+  }
+  // As run_scene: the grid memory of the next two drops' falls is asked for while this one is placed.
+  for (std::size_t k = 0; k < drops.size(); ++k) {
+    if (k + 2 < drops.size()) engine.prefetch(drops[k + 2], 2);
+    if (k + 1 < drops.size()) engine.prefetch(drops[k + 1], 1);
+    engine.prefetch(drops[k], 0);
+    out[order[k]] = engine.place(drops[k]);
   }
   return out;
 }

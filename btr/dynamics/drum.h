@@ -22,6 +22,7 @@ class DrumStepper {
   Vec3 rotate(const Vec3& x, double dphi) const;
 
  private:
+  Vec3 rotate(const Vec3& x, double cos_dphi, double sin_dphi) const;
   int dimension_;
   Container container_;
   double lift_;

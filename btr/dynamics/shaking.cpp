@@ -2,7 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
+#include <utility>
 
 #include "btr/placement/deposition.h"
 
@@ -12,10 +12,13 @@ Shaker::Shaker(int dimension, const Container& container, double lift, double no
     : dimension_(dimension), container_(container), lift_(lift), noise_(noise), rng_(seed) {}
 
 std::vector<std::size_t> Shaker::height_order(const Grains& grains) {
+  // The heights sorted with their indices beside them (no reads into the grains while sorting); the
+  // index breaks ties, so this is the stable order by height.
+  std::vector<std::pair<double, std::size_t>> keyed(grains.size());
+  for (std::size_t i = 0; i < grains.size(); ++i) keyed[i] = {grains[i].x.z(), i};
+  std::sort(keyed.begin(), keyed.end());
   std::vector<std::size_t> order(grains.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(),
-                   [&](std::size_t a, std::size_t b) { return grains[a].x.z() < grains[b].x.z(); });
+  for (std::size_t i = 0; i < keyed.size(); ++i) order[i] = keyed[i].second;
   return order;
 }
 

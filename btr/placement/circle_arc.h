@@ -34,11 +34,33 @@ inline double pseudo_angle(double x, double y) {
   const double p = x / (std::abs(x) + std::abs(y));
   return y >= 0.0 ? 1.0 - p : 3.0 + p;
 }
+// cos t and sin t to about 1e-15 (Taylor polynomials on [-pi/4, pi/4] after reduction by quarter
+// turns): for the screen below, which needs far less than the library's last-bit accuracy.
+inline void screen_cos_sin(double t, double& c, double& s) {
+  constexpr double kHalfPiHi = 1.5707963267948966, kHalfPiLo = 6.123233995736766e-17;
+  const double k = std::nearbyint(t * (2.0 / M_PI));
+  const double x = (t - k * kHalfPiHi) - k * kHalfPiLo, x2 = x * x;
+  const double sx = x + x * x2 * (-1.0 / 6 + x2 * (1.0 / 120 + x2 * (-1.0 / 5040 + x2 * (1.0 / 362880 +
+                    x2 * (-1.0 / 39916800 + x2 * (1.0 / 6227020800 + x2 * (-1.0 / 1307674368000.0)))))));
+  const double cx = 1.0 + x2 * (-0.5 + x2 * (1.0 / 24 + x2 * (-1.0 / 720 + x2 * (1.0 / 40320 + x2 * (-1.0 / 3628800 +
+                    x2 * (1.0 / 479001600 + x2 * (-1.0 / 87178291200.0 + x2 * (1.0 / 20922789888000.0))))))));
+  switch (static_cast<long>(k) & 3) {
+    case 0: c = cx, s = sx; break;
+    case 1: c = -sx, s = cx; break;
+    case 2: c = -cx, s = -sx; break;
+    default: c = sx, s = -cx; break;
+  }
+}
+
 // The screen for roots up to t_max: the pseudo-angle of t_max plus a margin (1e-9, far above its
 // round-off and below nothing the roots' own tolerance needs); no screen (5) when t_max is near 2 pi.
+// A screen only rejects roots beyond t_max early: every root it lets through is still compared with
+// t_max exactly, so its own accuracy (screen_cos_sin) changes no result.
 inline double root_screen(double t_max) {
   if (!(t_max < kTwoPi - 1e-6)) return 5.0;
-  return pseudo_angle(std::cos(t_max), std::sin(t_max)) + 1e-9;
+  double c, s;
+  screen_cos_sin(t_max, c, s);
+  return pseudo_angle(c, s) + 1e-9;
 }
 
 // All t in (t_min, t_max] with a cos t + b sin t = c, ascending; returns how many (0, 1 or 2).

@@ -22,7 +22,8 @@ struct Products {
   }
 };
 
-// Tries one active subset: d = g + sum lambda_i n_i with n_i . d = 0 on the subset.
+// Tries one active subset: d = g + sum lambda_i n_i with n_i . d = 0 on the subset. Writes `out`, which
+// holds a fresh Descent, only when the subset is the answer.
 bool try_subset(const Vec3* n, const Products& p, std::size_t count, unsigned mask, Descent& out) {
   const Vec3 g(0.0, 0.0, -1.0);
   int idx[3];
@@ -31,7 +32,12 @@ bool try_subset(const Vec3* n, const Products& p, std::size_t count, unsigned ma
     if (mask & (1u << i)) idx[k++] = static_cast<int>(i);
   Vec3 d = g;
   double lambda[3] = {0, 0, 0};
-  if (k > 0) {
+  if (k == 1) {  // the usual case, without the matrices (the same operations as below)
+    const double l = p.rhs[idx[0]] / p.gram[idx[0]][idx[0]];
+    if (l < -kForceEps) return false;
+    lambda[0] = l;
+    d += l * n[idx[0]];
+  } else if (k > 1) {
     Eigen::Matrix3d gram = Eigen::Matrix3d::Identity();
     Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
     for (int a = 0; a < k; ++a) {
@@ -40,9 +46,7 @@ bool try_subset(const Vec3* n, const Products& p, std::size_t count, unsigned ma
     }
     // Reject dependent normals (supports on one line, a repeated contact): another subset covers them.
     Eigen::Vector3d l = Eigen::Vector3d::Zero();
-    if (k == 1) {
-      l(0) = rhs(0) / gram(0, 0);
-    } else if (k == 2) {
+    if (k == 2) {
       const Eigen::Matrix2d sub = gram.topLeftCorner<2, 2>();
       if (sub.determinant() < 1e-10) return false;
       l.head<2>() = sub.inverse() * rhs.head<2>();
@@ -58,7 +62,6 @@ bool try_subset(const Vec3* n, const Products& p, std::size_t count, unsigned ma
   }
   for (std::size_t i = 0; i < count; ++i)
     if (!(mask & (1u << i)) && n[i].dot(d) < -kFeasibleEps) return false;
-  out = Descent{};
   out.direction = d.norm() < 1e-12 ? Vec3::Zero() : d;
   for (int a = 0; a < k; ++a) {
     out.force[idx[a]] = lambda[a];
