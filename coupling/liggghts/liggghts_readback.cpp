@@ -266,4 +266,25 @@ RelaxResult read_liggghts_result(const std::string& dir, const Packing& original
   return res;
 }
 
+Grains read_liggghts_snapshot(const std::string& dir, std::size_t k, const Packing& original) {
+  const std::string path = (std::filesystem::path(dir) / liggghts_snapshot_file(k)).string();
+  const Dump d = read_dump(path);
+  const std::size_t n = original.grains.size();
+  if (d.rows.size() != n)
+    fail(path, "lost atoms: " + std::to_string(d.rows.size()) + " grains of " + std::to_string(n), FailureKind::LostGrains,
+         {{"grains", n}, {"returned", d.rows.size()}});
+  const int c_id = d.column("id", path), c_x = d.column("x", path), c_y = d.column("y", path), c_z = d.column("z", path);
+  Grains out = original.grains;
+  std::vector<char> seen(n, 0);
+  for (const auto& row : d.rows) {
+    const double idv = row[c_id];
+    if (idv < 1 || idv > static_cast<double>(n) || idv != std::floor(idv) || seen[static_cast<std::size_t>(idv) - 1])
+      fail(path, "unexpected or repeated grain id " + std::to_string(idv));
+    const std::size_t i = static_cast<std::size_t>(idv) - 1;
+    seen[i] = 1;
+    out[i].x = Vec3(row[c_x], row[c_y], row[c_z]);
+  }
+  return out;
+}
+
 }  // namespace btr
