@@ -124,62 +124,59 @@ void expect_rotated_drum(const fs::path& out, const std::string& name, int dimen
   EXPECT_LT(mean_deg, 1.1 * 30.0) << engine;
 }
 
-TEST_F(DrumDemCli, TinyDrumsTurnInLiggghtsAndYade) {
-  for (int dimension : {2, 3}) {
-    const std::string name = "tiny_drum" + std::to_string(dimension) + "d";
-    SCOPED_TRACE(name);
-    const std::string scene = drum_scene(dir_, name, dimension, "froude = 0.02\n");
-    // the dynamic BTR run of the same scene: its fill (step 0) and its table's columns
-    const fs::path btr_out = dir_ / (name + "_btr");
-    const CliRun b = btr("drum " + scene + " -o " + btr_out.string() + " --steps 1 --quiet");
-    ASSERT_EQ(b.code, 0) << b.err;
-    const Packing fill = read_packing((btr_out / (name + "_s000000.csv")).string());
-    const std::string header = first_line(btr_out / (name + "_steps.csv"));
-    for (const std::string engine : {"liggghts", "yade"}) {
-      SCOPED_TRACE(engine);
-      if (!btr_test::have_engine(engine)) {
-        ADD_FAILURE() << engine << " is not installed";
-        continue;
-      }
-      const fs::path out = dir_ / (name + "_" + engine);
-      const CliRun r = btr("drum " + scene + " -o " + out.string() + " --engine " + engine +
-                           " --revolutions " + std::to_string(3.0 / 36.0) + " --settle-max-time 0.05 --time-limit 120");
-      ASSERT_EQ(r.code, 0) << r.out << r.err;
-      expect_rotated_drum(out, name, dimension, engine, fill, header);
-    }
+// The dynamic BTR run of a tiny drum gives the fill (its step 0) and the table's columns; the DEM run turns the
+// same drum by 30 degrees (3 BTR steps of 10 degrees) at Froude 0.02.
+void turn_tiny_drum(const fs::path& dir, int dimension, const std::string& engine) {
+  if (!btr_test::have_engine(engine)) GTEST_FAIL() << engine << " is not installed";
+  const std::string name = "tiny_drum" + std::to_string(dimension) + "d";
+  const std::string scene = drum_scene(dir, name, dimension, "froude = 0.02\n");
+  const fs::path btr_out = dir / (name + "_btr_" + engine);
+  const CliRun b = run_btr("drum " + scene + " -o " + btr_out.string() + " --steps 1 --quiet", dir);
+  ASSERT_EQ(b.code, 0) << b.err;
+  const Packing fill = read_packing((btr_out / (name + "_s000000.csv")).string());
+  const std::string header = first_line(btr_out / (name + "_steps.csv"));
+  const fs::path out = dir / (name + "_" + engine);
+  const CliRun r = run_btr("drum " + scene + " -o " + out.string() + " --engine " + engine + " --revolutions " +
+                               std::to_string(3.0 / 36.0) + " --settle-max-time 0.05 --time-limit 120",
+                           dir);
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  expect_rotated_drum(out, name, dimension, engine, fill, header);
+}
+
+TEST_F(DrumDemCli, Tiny2dDrumTurnsInLiggghts) { turn_tiny_drum(dir_, 2, "liggghts"); }
+TEST_F(DrumDemCli, Tiny3dDrumTurnsInLiggghts) { turn_tiny_drum(dir_, 3, "liggghts"); }
+TEST_F(DrumDemCli, Tiny2dDrumTurnsInYade) { turn_tiny_drum(dir_, 2, "yade"); }
+TEST_F(DrumDemCli, Tiny3dDrumTurnsInYade) { turn_tiny_drum(dir_, 3, "yade"); }
+
+// `btr relax` of a BTR drum snapshot (step 2) in the still drum: accepted, every grain kept and inside the drum,
+// nobody carried far.
+void relax_drum_snapshot(const fs::path& dir, int dimension, const std::string& engine) {
+  if (!btr_test::have_engine(engine)) GTEST_FAIL() << engine << " is not installed";
+  const std::string name = "relax_drum" + std::to_string(dimension) + "d";
+  const std::string scene = drum_scene(dir, name, dimension, "");
+  const fs::path btr_out = dir / (name + "_btr_" + engine);
+  const CliRun b = run_btr("drum " + scene + " -o " + btr_out.string() + " --steps 2 --quiet", dir);
+  ASSERT_EQ(b.code, 0) << b.err;
+  const Packing snap = read_packing((btr_out / (name + "_s000002.csv")).string());
+  const fs::path out = dir / (name + "_relax_" + engine);
+  const CliRun r = run_btr("relax " + (btr_out / (name + "_s000002.csv")).string() + " -o " + out.string() +
+                               " --engine " + engine + " --max-time 0.05 --time-limit 120",
+                           dir);
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  const Packing relaxed = read_packing((out / "relaxed.csv").string());
+  ASSERT_EQ(relaxed.grains.size(), snap.grains.size());
+  for (std::size_t i = 0; i < snap.grains.size(); ++i) {
+    const Grain& g = relaxed.grains[i];
+    EXPECT_EQ(g.r, snap.grains[i].r);
+    EXPECT_GT(kR - std::hypot(g.x.x(), g.x.z() - kR), 0.5 * g.r) << "grain " << i + 1;
+    EXPECT_LT((g.x - snap.grains[i].x).norm(), 2.0 * g.r) << "grain " << i + 1;  // a settle, not a rotation
   }
 }
 
-TEST_F(DrumDemCli, RelaxOfABtrDrumSnapshot) {
-  for (int dimension : {2, 3}) {
-    const std::string name = "relax_drum" + std::to_string(dimension) + "d";
-    const std::string scene = drum_scene(dir_, name, dimension, "");
-    const fs::path btr_out = dir_ / (name + "_btr");
-    const CliRun b = btr("drum " + scene + " -o " + btr_out.string() + " --steps 2 --quiet");
-    ASSERT_EQ(b.code, 0) << b.err;
-    const Packing snap = read_packing((btr_out / (name + "_s000002.csv")).string());
-    for (const std::string engine : {"liggghts", "yade"}) {
-      SCOPED_TRACE(name + " " + engine);
-      if (!btr_test::have_engine(engine)) {
-        ADD_FAILURE() << engine << " is not installed";
-        continue;
-      }
-      const fs::path out = dir_ / (name + "_relax_" + engine);
-      const CliRun r = btr("relax " + (btr_out / (name + "_s000002.csv")).string() + " -o " + out.string() +
-                           " --engine " + engine + " --max-time 0.05 --time-limit 120");
-      ASSERT_EQ(r.code, 0) << r.out << r.err;
-      const Packing relaxed = read_packing((out / "relaxed.csv").string());
-      ASSERT_EQ(relaxed.grains.size(), snap.grains.size());
-      for (std::size_t i = 0; i < snap.grains.size(); ++i) {
-        const Grain& g = relaxed.grains[i];
-        EXPECT_EQ(g.r, snap.grains[i].r);
-        EXPECT_GT(kR - std::hypot(g.x.x(), g.x.z() - kR), 0.5 * g.r) << "grain " << i + 1;
-        // still drum: nobody travels far (a settle, not a rotation)
-        EXPECT_LT((g.x - snap.grains[i].x).norm(), 2.0 * g.r) << "grain " << i + 1;
-      }
-    }
-  }
-}
+TEST_F(DrumDemCli, RelaxOf2dDrumSnapshotInLiggghts) { relax_drum_snapshot(dir_, 2, "liggghts"); }
+TEST_F(DrumDemCli, RelaxOf3dDrumSnapshotInLiggghts) { relax_drum_snapshot(dir_, 3, "liggghts"); }
+TEST_F(DrumDemCli, RelaxOf2dDrumSnapshotInYade) { relax_drum_snapshot(dir_, 2, "yade"); }
+TEST_F(DrumDemCli, RelaxOf3dDrumSnapshotInYade) { relax_drum_snapshot(dir_, 3, "yade"); }
 
 TEST_F(DrumDemCli, BadSpeedsAreRefused) {
   struct Case {
