@@ -19,6 +19,8 @@ namespace btr_app {
 using nlohmann::json;
 namespace fs = std::filesystem;
 
+constexpr double kRotationMaxOverlap = 0.2;  // of the smaller radius, at the rotation's start
+
 int run_drum_dem(btr::Scene scene, const DrumDemOptions& o) {
   const std::string name = output_name(o.name, scene);
   const double R = scene.container.radius;
@@ -43,7 +45,11 @@ int run_drum_dem(btr::Scene scene, const DrumDemOptions& o) {
   start.grains = relaxed.relaxed.grains;
   start.meta = fill.meta;
   const std::unique_ptr<btr::EngineAdapter> adapter = btr::make_adapter(o.engine);
-  const btr::DrumRotationResult rot = btr::rotate_drum(start, scene, *adapter, o.engine, settings, o.revolutions,
+  // The relaxed packing's overlaps are the engine's own contacts under load (a short settle of soft grains can
+  // leave several percent), not a BTR packing's error: the BTR bound (5 %) is widened to 20 %.
+  btr::RelaxSettings rotation_settings = settings;
+  rotation_settings.max_overlap = kRotationMaxOverlap;
+  const btr::DrumRotationResult rot = btr::rotate_drum(start, scene, *adapter, o.engine, rotation_settings, o.revolutions,
                                                        (fs::path(o.out) / "rotation").string());
 
   // 4. The series and the table, as `btr drum` writes them (same columns, measures from btr::drum_measures).

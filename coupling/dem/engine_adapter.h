@@ -118,7 +118,12 @@ class EngineAdapter {
   // A rotating drum's snapshot k (1-based, DrumRotation::snapshot_steps): original's grains at the positions the
   // engine wrote (same order and ids). Throws EngineFailure for a missing, truncated or non-finite file or
   // missing or repeated ids.
-  virtual Grains read_snapshot(const std::string& dir, std::size_t k, const Packing& original) const = 0;
+  // (An adapter that never runs a drum need not: this one refuses.)
+  virtual Grains read_snapshot(const std::string& dir, std::size_t k, const Packing& original) const {
+    (void)original;
+    throw EngineFailure(FailureKind::BadOutput,
+                        dir + ": this engine adapter reads no rotating-drum snapshots (snapshot " + std::to_string(k) + ")");
+  }
   // After the engine exited non-zero or was ended by a signal: the failure its own outputs in dir report
   // (its log's error line, its status file), with the kind and numbers they give; std::nullopt if they
   // say nothing (relax.cpp then reports an engine_error with the exit status).
