@@ -103,6 +103,11 @@ std::vector<DemWall> dem_walls(const Container& c, int dimension) {
       // The drum's surface only: the floor z = 0 is its lowest line, which turns with it.
       require_positive(c.radius, "radius", c);
       if (dimension == 3) require_positive(c.size_y, "length", c);
+      if (dimension == 3 && c.periodic_ends)
+        throw std::runtime_error(
+            "container 'drum' (periodic ends): DEM export of a drum with periodic ends is not supported (its mesh "
+            "would cross the periodic boundary, and YADE's cell is not written for it); relax or rotate drums with "
+            "ends = \"walls\", or 2D drums");
       DemWall w;
       w.kind = DemWall::Kind::Mesh;
       w.name = "drum";

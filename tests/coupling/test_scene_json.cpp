@@ -182,7 +182,14 @@ TEST(SceneJson, DrumEndsRoundTripAndDemWalls) {
   EXPECT_EQ(scene_from_json(scene_to_json(s), "p.json").drum->froude, 0.004);
   EXPECT_FALSE(scene_from_json(scene_to_json(s), "p.json").drum->rpm);
   const double R = s.container.radius, half = 0.5 * s.container.size_y;
-  for (bool periodic : {true, false}) {
+  s.container.periodic_ends = true;
+  try {
+    dem_walls(s.container, 3);
+    ADD_FAILURE() << "a drum with periodic ends was exported";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("container 'drum' (periodic ends)"), std::string::npos) << e.what();
+  }
+  for (bool periodic : {false}) {
     s.container.periodic_ends = periodic;
     const std::vector<DemWall> walls = dem_walls(s.container, 3);
     ASSERT_EQ(walls.size(), 1u);  // no floor: the drum's lowest line turns with it
