@@ -17,6 +17,9 @@
 #include "btr/scene/scene_toml.h"
 #include "command_support.h"
 #include "commands.h"
+#include "drum_dem.h"
+#include "drum_table.h"
+#include "engine_command.h"
 #include "coupling/io/atomic_file.h"
 #include "coupling/io/scene_json.h"
 #include "progress.h"
@@ -33,20 +36,11 @@ struct Options {
   std::uint64_t seed = 0;
   std::int64_t steps = 0;
   bool check = false, quiet = false;
+  DrumDemOptions dem;  // --engine: the DEM drum
 };
 
 // Processor time of this process [s] (std::clock): the step's own cost when other jobs share the cores.
 double cpu_now() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
-
-std::string row_text(std::int64_t step, double angle_deg, double seconds, double cpu, const btr::DrumMeasures& m,
-                     double R) {
-  char buf[400];
-  std::snprintf(buf, sizeof buf, "%lld,%.10g,%.6f,%.6f,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g\n",
-                static_cast<long long>(step), angle_deg, seconds, cpu, m.segregation_index, m.axis_small / R,
-                m.axis_large / R, m.core_small / R, m.core_large / R, m.com_x / R, m.com_z / R,
-                m.surface_valid ? m.surface_angle_deg : NAN);
-  return buf;
-}
 
 int run(const Options& o, const CLI::App& cmd) {
   btr::Scene scene = btr::load_scene(o.scene);
@@ -55,6 +49,15 @@ int run(const Options& o, const CLI::App& cmd) {
                           "snapshot_every) with container.kind = \"drum\"");
   const std::uint64_t seed = cmd.count("--seed") ? o.seed : scene.seed;
   scene.seed = seed;
+  if (!o.dem.engine.empty()) {
+    DrumDemOptions d = o.dem;
+    d.out = o.out, d.name = o.name, d.seed = seed, d.quiet = o.quiet;
+    if (!cmd.count("--revolutions")) d.revolutions = scene.drum->revolutions;
+    return run_drum_dem(scene, d);
+  }
+  for (const char* dem_only : {"--np", "--time-limit", "--revolutions", "--settle-max-time"})
+    if (cmd.count(dem_only))
+      throw btr::SceneError(std::string(dem_only) + ": only with --engine liggghts|yade (the DEM drum)");
   const btr::DrumSpec dr = *scene.drum;
   const std::int64_t steps =
       cmd.count("--steps") ? o.steps : std::llround(dr.revolutions * static_cast<double>(dr.steps_per_revolution));
@@ -62,9 +65,7 @@ int run(const Options& o, const CLI::App& cmd) {
   const double R = scene.container.radius, dphi = 2.0 * M_PI / static_cast<double>(dr.steps_per_revolution);
   const json scene_json = btr::scene_to_json(scene);
   SeriesWriter series(o.out, name, "step");
-  std::string table =
-      "step,angle_deg,seconds,cpu_seconds,segregation_index,axis_small_R,axis_large_R,core_small_R,core_large_R,com_x_R,com_z_R,"
-      "surface_angle_deg\n";
+  std::string table = drum_table_header();
   bool all_ok = true;
   auto t0 = std::chrono::steady_clock::now();
   double c0 = cpu_now();
@@ -76,7 +77,7 @@ int run(const Options& o, const CLI::App& cmd) {
   double seconds = fill_seconds, cpu = cpu_now() - c0;
   for (std::int64_t s = 0;; ++s) {
     const double angle_deg = 360.0 * static_cast<double>(s) / static_cast<double>(dr.steps_per_revolution);
-    table += row_text(s, angle_deg, seconds, cpu, btr::drum_measures(grains, scene.dimension, scene.container), R);
+    table += drum_table_row(s, angle_deg, seconds, cpu, btr::drum_measures(grains, scene.dimension, scene.container), R);
     if (s % dr.snapshot_every == 0 || s == steps) {
       json meta = snapshot_meta("drum", scene, scene_json, seed, grains.size());
       meta["step"] = s;
@@ -118,7 +119,10 @@ Runner add_drum_command(CLI::App& app) {
       "every snapshot_every steps, OUTDIR/NAME.pvd (ParaView collection) and OUTDIR/NAME_steps.csv (step,\n"
       "angle_deg, seconds, cpu_seconds, segregation_index, axis_small_R, axis_large_R, core_small_R, core_large_R, com_x_R,\n"
       "com_z_R, surface_angle_deg; distances in drum radii, small/large split at the median radius).\n"
-      "Exit codes: 0 ok, 2 bad input, 3 internal failure (placement or I/O), 4 --check failed.");
+      "With --engine liggghts|yade the drum is DEM: the same fill, relaxed in the still drum (OUTDIR/relax/),\n"
+      "then rotated by the engine at [drum].rpm or .froude (default Froude 5e-3) for --revolutions\n"
+      "(OUTDIR/rotation/), with snapshots at the same angles and OUTDIR/drum_dem.json (docs/guide/drum_dem.md).\n"
+      "Exit codes: 0 ok, 2 bad input, 3 internal failure (placement or I/O), 4 --check failed, 5 the engine failed.");
   cmd->add_option("scene", o->scene, "scene file (TOML) with a drum container and a [drum] table")
       ->required()
       ->check(CLI::ExistingFile);
@@ -129,7 +133,23 @@ Runner add_drum_command(CLI::App& app) {
   cmd->add_flag("--check", o->check, "self-check every snapshot; exit code 4 if any fails (files are still written)");
   cmd->add_flag("-q,--quiet", o->quiet, "no progress bar and no summary; only errors");
   cmd->add_option("--name", o->name, "base name of the output files (default: the scene name)");
-  return [o, cmd]() { return run_reporting_errors("drum", [&] { return run(*o, *cmd); }); };
+  cmd->add_option("--engine", o->dem.engine, "liggghts | yade: rotate the drum in this DEM engine (default: dynamic BTR)")
+      ->check(CLI::IsMember({"liggghts", "yade"}))
+      ->excludes("--steps")
+      ->excludes("--check");
+  cmd->add_option("--np", o->dem.np, "--engine: LIGGGHTS MPI ranks, YADE threads")->check(positive_integer());
+  cmd->add_option("--time-limit", o->dem.time_limit, "--engine: wall-time limit of each engine run [s]")
+      ->capture_default_str()
+      ->check(positive_number());
+  cmd->add_option("--revolutions", o->dem.revolutions, "--engine: revolutions to turn (default: [drum].revolutions)")
+      ->check(positive_number());
+  cmd->add_option("--settle-max-time", o->dem.settle_max_time,
+                  "--engine: simulated time limit of the relaxation in the still drum [s] (default: relax.max_time)")
+      ->check(positive_number());
+  return [o, cmd]() {
+    if (o->dem.engine.empty()) return run_reporting_errors("drum", [&] { return run(*o, *cmd); });
+    return run_engine_command("drum", kInternalFailure, [&] { return run(*o, *cmd); });  // exit 5: the engine failed
+  };
 }
 
 }  // namespace btr_app

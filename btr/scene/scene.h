@@ -122,6 +122,10 @@ struct DrumSpec {
   double revolutions = 1.0;
   double lift = 0.0;                // m; default radius / 10
   std::int64_t snapshot_every = 0;  // steps between snapshots (the initial and last are always written)
+  // The DEM drum's speed (btr drum --engine; coupling/dem/drum_rotation.h): at most one of them; neither = the
+  // default Froude number there.
+  std::optional<double> rpm;        // revolutions per minute, > 0
+  std::optional<double> froude;     // omega^2 R / g, in (0, 1)
 };
 
 // Rigid clusters (seed 000 section 5, cohesive nano-powders): the grains are dropped as random compact

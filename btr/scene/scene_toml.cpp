@@ -189,7 +189,7 @@ class SceneParser {
     if (scene_.container.kind != ContainerKind::Drum)
       rd_.fail(s->line, "[drum]: expected container.kind = \"drum\" for a rotating drum, got \"" +
                             std::string(to_string(scene_.container.kind)) + "\"");
-    rd_.check_keys(*s, {"steps_per_revolution", "revolutions", "lift", "snapshot_every"});
+    rd_.check_keys(*s, {"steps_per_revolution", "revolutions", "lift", "snapshot_every", "rpm", "froude"});
     DrumSpec dr;
     auto steps = rd_.integer(*s, "steps_per_revolution", [](std::int64_t v) { return v > 0; }, "a positive integer");
     if (!steps) rd_.missing(*s, "steps_per_revolution", "a positive integer");
@@ -199,6 +199,13 @@ class SceneParser {
                             "a positive lift [m] (default: radius / 10, as in the BTR paper)");
     dr.snapshot_every = rd_.integer(*s, "snapshot_every", [](std::int64_t v) { return v > 0; }, "a positive number of steps")
                             .value_or(dr.steps_per_revolution);
+    // The DEM drum's speed (btr drum --engine): rpm or the Froude number omega^2 R / g, not both.
+    dr.rpm = rd_.number(*s, "rpm", positive, "a positive rotation speed [revolutions per minute]");
+    dr.froude = rd_.number(*s, "froude", [](double v) { return v > 0.0 && v < 1.0; },
+                           "a Froude number omega^2 R / g in (0, 1) (1 = centrifuging; rolling regime about 1e-4 to 1e-2)");
+    if (dr.rpm && dr.froude)
+      rd_.fail(Reader::line_of(*rd_.get(*s, "froude")),
+               "drum.froude: give drum.rpm or drum.froude, not both (they set the same speed)");
     scene_.drum = dr;
   }
 

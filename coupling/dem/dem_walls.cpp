@@ -10,6 +10,11 @@ namespace btr {
 
 double DemWall::distance(const Vec3& x) const {
   if (kind == Kind::Cylinder) return position - std::hypot(x.x(), x.y());
+  if (drum_radius > 0.0) {
+    double d = drum_radius - std::hypot(x.x(), x.z() - drum_radius);
+    if (drum_ends) d = std::min(d, drum_half - std::abs(x.y()));
+    return d;
+  }
   if (kind == Kind::Mesh) {
     // Unsigned: a mesh has no inside to tell (an open mesh least of all); a grain is never beyond it.
     // Triangles farther than `position` (a twentieth of the mesh's size) count as that far.
@@ -94,16 +99,24 @@ std::vector<DemWall> dem_walls(const Container& c, int dimension) {
       walls.push_back(w);
       break;
     }
-    case ContainerKind::Drum:
-      // Refused rather than approximated: the drum's wall is a horizontal cylinder (LIGGGHTS would need a
-      // mesh or a rotated region wall, YADE a facet cylinder), and no export of it, with end walls or
-      // periodic ends, has been written or checked against the engines yet.
-      throw std::runtime_error(
-          std::string("container 'drum'") +
-          (dimension == 3 ? (c.periodic_ends ? " (periodic ends)" : " (flat end walls)") : "") +
-          ": DEM export of a rotating-drum packing, with flat end walls or periodic ends, is not supported (its "
-          "wall is a horizontal cylinder, which the LIGGGHTS and YADE writers do not export); relax packings "
-          "built in an open, box, periodic, hele-shaw or cylinder container");
+    case ContainerKind::Drum: {
+      // The drum's surface only: the floor z = 0 is its lowest line, which turns with it.
+      require_positive(c.radius, "radius", c);
+      if (dimension == 3) require_positive(c.size_y, "length", c);
+      if (dimension == 3 && c.periodic_ends)
+        throw std::runtime_error(
+            "container 'drum' (periodic ends): DEM export of a drum with periodic ends is not supported (its mesh "
+            "would cross the periodic boundary, and YADE's cell is not written for it); relax or rotate drums with "
+            "ends = \"walls\", or 2D drums");
+      DemWall w;
+      w.kind = DemWall::Kind::Mesh;
+      w.name = "drum";
+      w.drum_radius = c.radius;
+      w.drum_half = 0.5 * c.size_y;
+      w.drum_ends = dimension == 3 && !c.periodic_ends;
+      walls.assign(1, w);
+      break;
+    }
   }
   return walls;
 }

@@ -55,6 +55,18 @@ struct PourRelease {
   long steps_per_check = 0;    // the settle's check window (check_schedule)
 };
 
+// The rotation of a drum (drum_rotation.h), run instead of the stop rule: the drum's mesh (drum_mesh.h) turns
+// about the drum's axis (along y through x = 0, z = axis_z) at omega rad/s in the drum's sense (its lowest line
+// towards +x, as DrumStepper: a rotation about -y), from the run's start; the grains' positions are written
+// after each of snapshot_steps (cumulative step counts, increasing; the last one ends the run), snapshot k
+// (1-based) to the engine's file k, read back by EngineAdapter::read_snapshot.
+struct DrumRotation {
+  bool enabled = false;
+  double omega = 0.0;   // rad/s, > 0
+  double axis_z = 0.0;  // m
+  std::vector<long> snapshot_steps;
+};
+
 // The numbers every engine input is built from, computed once by relax.cpp.
 struct RelaxPlan {
   double timestep = 0.0;        // s, already checked against the stable step
@@ -77,6 +89,7 @@ struct RelaxPlan {
   CompactionPlan compaction;  // enabled only with a target packing fraction
   PourRelease pour;           // enabled only for a reference pour (pour.h)
   TapSchedule tap;            // enabled only for DEM tapping (tapping.h); replaces the stop rule
+  DrumRotation rotation;      // enabled only for a rotating drum (drum_rotation.h); replaces the stop rule
 };
 
 // The threshold of the plan's stop rule: J (kinetic-energy), a ratio (unbalanced-force) or m (displacement).
@@ -104,6 +117,15 @@ class EngineAdapter {
   // Reads the outputs in dir; throws EngineFailure if they show a failed run.
   virtual RelaxResult read_back(const std::string& dir, const Packing& original, const Scene& scene,
                                 const RelaxPlan& plan) const = 0;
+  // A rotating drum's snapshot k (1-based, DrumRotation::snapshot_steps): original's grains at the positions the
+  // engine wrote (same order and ids). Throws EngineFailure for a missing, truncated or non-finite file or
+  // missing or repeated ids.
+  // (An adapter that never runs a drum need not: this one refuses.)
+  virtual Grains read_snapshot(const std::string& dir, std::size_t k, const Packing& original) const {
+    (void)original;
+    throw EngineFailure(FailureKind::BadOutput,
+                        dir + ": this engine adapter reads no rotating-drum snapshots (snapshot " + std::to_string(k) + ")");
+  }
   // After the engine exited non-zero or was ended by a signal: the failure its own outputs in dir report
   // (its log's error line, its status file), with the kind and numbers they give; std::nullopt if they
   // say nothing (relax.cpp then reports an engine_error with the exit status).

@@ -64,6 +64,9 @@ std::vector<Site> pour_sites(const Scene& scene, double r_max) {
     refuse_scene_field(scene, "container.kind",
            "the reference pour does not support a mesh container yet (its release lattice covers boxes, "
            "cylinders and open floors); relax a BTR packing of it with `btr relax` instead");
+  if (c.kind == ContainerKind::Drum)
+    refuse_scene_field(scene, "container.kind",
+                       "\"drum\": the reference pour has no release lattice for a drum; run it with `btr drum --engine`");
   std::vector<DemWall> walls;
   try {
     walls = dem_walls(c, dim);

@@ -190,6 +190,8 @@ json scene_to_json(const Scene& s) {
                    {"revolutions", s.drum->revolutions},
                    {"lift", s.drum->lift},
                    {"snapshot_every", s.drum->snapshot_every}};
+  if (s.drum && s.drum->rpm) out["drum"]["rpm"] = *s.drum->rpm;
+  if (s.drum && s.drum->froude) out["drum"]["froude"] = *s.drum->froude;
   if (s.shaking)
     out["shaking"] = {{"cycles", s.shaking->cycles},
                       {"lift", s.shaking->lift},
@@ -395,12 +397,14 @@ Scene scene_from_json(const json& j, const std::string& origin) {
     s.intruder = spec;
   }
   if (j.contains("drum")) {
-    const json& dr = rd.object(j, "", "drum", {"steps_per_revolution", "revolutions", "lift", "snapshot_every"});
+    const json& dr = rd.object(j, "", "drum", {"steps_per_revolution", "revolutions", "lift", "snapshot_every", "rpm", "froude"});
     DrumSpec spec;
     spec.steps_per_revolution = rd.integer(dr, "drum", "steps_per_revolution");
     spec.revolutions = rd.number(dr, "drum", "revolutions");
     spec.lift = rd.number(dr, "drum", "lift");
     spec.snapshot_every = rd.integer(dr, "drum", "snapshot_every");
+    if (dr.contains("rpm")) spec.rpm = rd.number(dr, "drum", "rpm");
+    if (dr.contains("froude")) spec.froude = rd.number(dr, "drum", "froude");
     s.drum = spec;
   }
   if (j.contains("shaking")) {

@@ -58,6 +58,10 @@ class LiggghtsAdapter : public EngineAdapter {
     return read_liggghts_result(dir, original, scene, plan);
   }
 
+  Grains read_snapshot(const std::string& dir, std::size_t k, const Packing& original) const override {
+    return read_liggghts_snapshot(dir, k, original);
+  }
+
   // LIGGGHTS ends with a non-zero status on its own errors (e.g. "ERROR: Lost atoms"): the log's first
   // failure line says which.
   std::optional<EngineFailure> failure_after_exit(const std::string& dir, const Packing&, const Scene&,

@@ -268,6 +268,28 @@ RelaxResult read_liggghts_result(const std::string& dir, const Packing& original
   return res;
 }
 
+// The original's grains at the positions of a dump of every atom (id, x, y, z); throws EngineFailure for lost,
+// unexpected or repeated ids.
+static Grains grains_from_dump(const std::string& path, const Packing& original) {
+  const Dump d = read_dump(path);
+  const std::size_t n = original.grains.size();
+  if (d.rows.size() != n)
+    fail(path, "lost atoms: " + std::to_string(d.rows.size()) + " grains of " + std::to_string(n), FailureKind::LostGrains,
+         {{"grains", n}, {"returned", d.rows.size()}});
+  const int c_id = d.column("id", path), c_x = d.column("x", path), c_y = d.column("y", path), c_z = d.column("z", path);
+  Grains out = original.grains;
+  std::vector<char> seen(n, 0);
+  for (const auto& row : d.rows) {
+    const double idv = row[c_id];
+    if (idv < 1 || idv > static_cast<double>(n) || idv != std::floor(idv) || seen[static_cast<std::size_t>(idv) - 1])
+      fail(path, "unexpected or repeated grain id " + std::to_string(idv));
+    const std::size_t i = static_cast<std::size_t>(idv) - 1;
+    seen[i] = 1;
+    out[i].x = Vec3(row[c_x], row[c_y], row[c_z]);
+  }
+  return out;
+}
+
 std::vector<TapSnapshot> read_liggghts_taps(const std::string& dir, const Packing& original, const RelaxPlan& plan) {
   namespace fs = std::filesystem;
   const std::string log_path = (fs::path(dir) / kLiggghtsLog).string();
@@ -303,30 +325,17 @@ std::vector<TapSnapshot> read_liggghts_taps(const std::string& dir, const Packin
       snap.settled = w.size() > 2 && w[2] == "settled";
     }
   }
-  const std::size_t n = original.grains.size();
   for (std::size_t i = 0; i < taps.size(); ++i) {
     if (!moved[i] || !rested[i])
       fail(log_path, "tap " + std::to_string(i + 1) + " of " + std::to_string(n_taps) + " did not end (no BTR-TAP-" +
                          (moved[i] ? "RESTED" : "MOVED") + " line)");
-    const std::string path = (fs::path(dir) / liggghts_tap_dump(static_cast<long>(i) + 1)).string();
-    const Dump atoms = read_dump(path);
-    if (atoms.rows.size() != n)
-      fail(path, "lost atoms: " + std::to_string(atoms.rows.size()) + " grains of " + std::to_string(n),
-           FailureKind::LostGrains, {{"grains", n}, {"returned", atoms.rows.size()}});
-    const int c_id = atoms.column("id", path), c_x = atoms.column("x", path), c_y = atoms.column("y", path),
-              c_z = atoms.column("z", path);
-    Grains& grains = taps[i].grains;
-    grains = original.grains;
-    std::vector<char> seen(n, 0);
-    for (const auto& row : atoms.rows) {
-      const double idv = row[c_id];
-      if (idv < 1 || idv > static_cast<double>(n) || idv != std::floor(idv) || seen[static_cast<std::size_t>(idv) - 1])
-        fail(path, "unexpected or repeated grain id " + std::to_string(idv));
-      seen[static_cast<std::size_t>(idv) - 1] = 1;
-      grains[static_cast<std::size_t>(idv) - 1].x = Vec3(row[c_x], row[c_y], row[c_z]);
-    }
+    taps[i].grains = grains_from_dump((fs::path(dir) / liggghts_tap_dump(static_cast<long>(i) + 1)).string(), original);
   }
   return taps;
+}
+
+Grains read_liggghts_snapshot(const std::string& dir, std::size_t k, const Packing& original) {
+  return grains_from_dump((std::filesystem::path(dir) / liggghts_snapshot_file(k)).string(), original);
 }
 
 }  // namespace btr

@@ -38,4 +38,8 @@ RelaxResult read_liggghts_result(const std::string& dir, const Packing& original
 // dump, or ids that are not the input's.
 std::vector<TapSnapshot> read_liggghts_taps(const std::string& dir, const Packing& original, const RelaxPlan& plan);
 
+// A rotating drum's snapshot k (1-based): dir/btr_rot_K.dump (liggghts_snapshot_file), original's grains at its
+// positions. Throws EngineFailure for a missing or truncated dump, missing or repeated ids, non-finite values.
+Grains read_liggghts_snapshot(const std::string& dir, std::size_t k, const Packing& original);
+
 }  // namespace btr

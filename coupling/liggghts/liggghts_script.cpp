@@ -15,6 +15,7 @@
 #include "btr/verify/cluster_unwrap.h"
 #include "coupling/dem/check_schedule.h"
 #include "coupling/dem/dem_walls.h"
+#include "coupling/dem/drum_mesh.h"
 #include "coupling/dem/materials.h"
 #include "coupling/dem/relax_plan.h"
 #include "coupling/dem/relax_target.h"
@@ -35,7 +36,8 @@ struct SimulationBox {
   std::string boundary;
 };
 
-SimulationBox make_box(const Grains& grains, int dimension, const Container& c, const RelaxPlan& plan) {
+SimulationBox make_box(const Grains& grains, int dimension, const Container& c, const RelaxPlan& plan,
+                       const TriangleMesh* drum) {
   double lo[3], hi[3], r_max = 0.0;
   for (int a = 0; a < 3; ++a) lo[a] = std::numeric_limits<double>::infinity(), hi[a] = -lo[a];
   for (const Grain& g : grains) {
@@ -79,10 +81,11 @@ SimulationBox make_box(const Grains& grains, int dimension, const Container& c, 
       set(0, -0.5 * c.size_x * (1 + 1e-6), 0.5 * c.size_x * (1 + 1e-6));
       set(1, -0.5 * c.size_y * (1 + 1e-6), 0.5 * c.size_y * (1 + 1e-6));
       break;
-    case ContainerKind::Drum:  // refused by dem_walls() before any script is written
-      bx = "f", by = "f";
-      set(0, -c.radius, c.radius);
-      set(1, -0.5 * c.size_y, 0.5 * c.size_y);
+    case ContainerKind::Drum:  // its mesh's bounding box, a hair wider (the panels' vertices lie outside R)
+      bx = "f", by = c.periodic_ends ? "p" : "f";
+      set(0, drum->lo.x() * (1 + 1e-6), drum->hi.x() * (1 + 1e-6));
+      if (c.periodic_ends) set(1, -0.5 * c.size_y, 0.5 * c.size_y);
+      else set(1, drum->lo.y() * (1 + 1e-6), drum->hi.y() * (1 + 1e-6));
       break;
   }
   if (dimension == 2) {  // one layer of spheres in y = 0: a fixed slab one largest diameter thick
@@ -95,6 +98,7 @@ SimulationBox make_box(const Grains& grains, int dimension, const Container& c, 
   if (plan.tap.enabled) b.lo[2] = -2.0 * plan.tap.amplitude;  // the tapped floor goes down to -amplitude
   // A mesh's nodes must lie inside the box (LIGGGHTS refuses a mesh that leaves it).
   if (c.kind == ContainerKind::Mesh) set(2, -1e-6 * c.mesh->hi.z(), std::max(b.hi[2], c.mesh->hi.z() * (1 + 1e-6)));
+  if (drum) set(2, drum->lo.z() - 1e-6 * drum->hi.z(), std::max(b.hi[2], drum->hi.z() * (1 + 1e-6)));
   b.boundary = bx + " " + by + " fm";
   return b;
 }
@@ -240,6 +244,26 @@ std::string liggghts_release(const PourRelease& pour) {
   return s.str() + "\n";
 }
 
+// A rotating drum's runs (DrumRotation): one run to each snapshot's step, then its positions. The run ends as at
+// max_time: the rotation's duration is its length.
+std::string liggghts_rotation_runs(const DrumRotation& rot) {
+  std::ostringstream s;
+  s << "# Rotation: " << rot.snapshot_steps.size() << " snapshots (" << liggghts_snapshot_file(1) << " ...), at steps";
+  for (long n : rot.snapshot_steps) s << " " << n;
+  s << "\n";
+  long done = 0;
+  for (std::size_t k = 0; k < rot.snapshot_steps.size(); ++k) {
+    s << "run " << rot.snapshot_steps[k] - done << "\n"
+      << "if \"${btr_ekin} > ${btr_bound}\" then &\n"
+      << "  \"print 'BTR-FAILURE kinetic energy ${btr_ekin} J above the bound ${btr_bound} J at t = ${btr_time} s'\" quit\n"
+      << "write_dump all custom " << liggghts_snapshot_file(k + 1) << " id x y z modify sort id format \"%d %.17g %.17g %.17g\"\n"
+      << "print \"BTR-SNAPSHOT " << k + 1 << " t = ${btr_time} s\"\n";
+    done = rot.snapshot_steps[k];
+  }
+  s << "print \"BTR-STOP max-time t = ${btr_time} s\"\n";
+  return s.str();
+}
+
 }  // namespace
 
 std::vector<double> liggghts_damping_gamma(const Grains& grains, const Scene& scene, double damping) {
@@ -293,6 +317,8 @@ std::string liggghts_viscous_fix(const std::string& id, const Grains& grains, co
   return s + "\n";
 }
 
+std::string liggghts_snapshot_file(std::size_t k) { return "btr_rot_" + std::to_string(k) + ".dump"; }
+
 std::string liggghts_wall_id(const std::string& wall_name) {
   std::string id = "btr_wall_";
   for (char c : wall_name) {
@@ -308,7 +334,10 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   const int dim = scene.dimension;
   const Grains& grains = packing.grains;
   const std::vector<DemWall> walls = dem_walls(scene.container, dim);
-  const SimulationBox box = make_box(grains, dim, scene.container, plan);
+  // A drum's surface: the mesh of panels for these grains (drum_mesh.h).
+  const std::shared_ptr<const TriangleMesh> drum =
+      scene.container.kind == ContainerKind::Drum ? drum_mesh(scene.container, dim, grains) : nullptr;
+  const SimulationBox box = make_box(grains, dim, scene.container, plan, drum.get());
   const TypeTable types = make_types(scene);
   const CheckSchedule sched = check_schedule(grains, scene, plan);
   const int n_types = static_cast<int>(types.type_material.size());
@@ -432,11 +461,19 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   for (const DemWall& w : walls) {
     if (w.kind == DemWall::Kind::Mesh) {
       // The mesh as placed (scaled and shifted like the packing), beside this script.
-      write_mesh_stl(*w.triangles, (fs::path(dir) / kLiggghtsMesh).string());
+      const TriangleMesh& mesh = w.triangles ? *w.triangles : *drum;
+      write_mesh_stl(mesh, (fs::path(dir) / kLiggghtsMesh).string());
       written.push_back((fs::path(dir) / kLiggghtsMesh).string());
+      if (drum)
+        s << "# The drum: " << mesh.triangles.size() << " triangles, " << drum_panels(scene.container.radius, r_min)
+          << " panels tangent to the cylinder (sagitta below " << g6(kDrumSagittaFraction) << " r_min).\n";
       s << "fix btr_mesh all mesh/surface file " << kLiggghtsMesh << " type " << types.wall_type << "\n"
         << "fix " << liggghts_wall_id(w.name) << " all wall/gran " << models
         << " mesh n_meshes 1 meshes btr_mesh store_force yes\n";
+      if (plan.rotation.enabled)
+        s << "# Rotation: " << g6(plan.rotation.omega) << " rad/s about the drum's axis, in its sense (lowest line towards +x)\n"
+          << "fix btr_rotate all move/mesh mesh btr_mesh rotate origin 0 0 " << g17(plan.rotation.axis_z)
+          << " axis 0 -1 0 period " << g17(2.0 * M_PI / plan.rotation.omega) << "\n";
       continue;
     }
     if (plan.tap.enabled && w.name == "floor") {  // a mesh that the taps move (liggghts_tapping.h)
@@ -525,7 +562,9 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   // The thermo output at the end of each chunk evaluates every compute the checks use (LIGGGHTS refuses a
   // compute between runs that was not invoked on the last step).
   if (compaction.enabled) s << liggghts_compaction_setup(compaction, dim);
-  s << "\nthermo_style    custom step time v_btr_ekin f_btr_kmean v_btr_unbalanced" << (by_displacement ? " v_btr_dmax" : "")
+  // A rotation's runs end between the mean's windows, where f_btr_kmean cannot be read: the column repeats E.
+  s << "\nthermo_style    custom step time v_btr_ekin " << (plan.rotation.enabled ? "v_btr_ekin" : "f_btr_kmean")
+    << " v_btr_unbalanced" << (by_displacement ? " v_btr_dmax" : "")
     << (compaction.enabled ? " v_btr_phi" : "") << "\n"
     << "thermo_modify   norm no lost " << (plan.has_region ? "ignore" : "error") << " format float %.17g\n"
     << "thermo          " << sched.steps_per_check << "\n\n";
@@ -559,6 +598,8 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   for (std::size_t i = 1; i < cols.size(); ++i) format += " %.17g";
   if (plan.tap.enabled)  // the taps replace the stop rule (liggghts_tapping.h)
     s << liggghts_tap_loop(plan.tap, names, format);
+  else if (plan.rotation.enabled)  // the turns replace it too (drum_rotation.h)
+    s << liggghts_rotation_runs(plan.rotation);
   else
     s << "label btr_loop\n"
     << "variable btr_check loop " << sched.max_checks << "\n"

@@ -28,6 +28,9 @@ inline constexpr const char* kLiggghtsLog = "log.liggghts";  // also LIGGGHTS' d
 inline constexpr const char* kLiggghtsFinalDump = "btr_final.dump";
 inline constexpr const char* kLiggghtsContactsDump = "btr_contacts.dump";
 
+// A rotating drum's snapshot k (1-based, DrumRotation): "btr_rot_K.dump" (id x y z, sorted by id).
+std::string liggghts_snapshot_file(std::size_t k);
+
 // The LIGGGHTS fix ID of a wall ("floor" -> "btr_wall_floor", "x-" -> "btr_wall_xlo", ...).
 std::string liggghts_wall_id(const std::string& wall_name);
 

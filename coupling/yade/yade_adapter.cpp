@@ -12,6 +12,7 @@
 
 #include "btr/verify/cluster_unwrap.h"
 #include "coupling/io/atomic_file.h"
+#include "coupling/dem/drum_mesh.h"
 #include "coupling/io/mesh_stl.h"
 #include "coupling/yade/yade_script.h"
 
@@ -55,8 +56,10 @@ class YadeAdapter : public EngineAdapter {
     fs::permissions(d / yade_files::kScript, fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec,
                     fs::perm_options::add);
     std::vector<std::string> written{(d / yade_files::kScript).string(), (d / yade_files::kPacking).string()};
-    if (scene.container.kind == ContainerKind::Mesh) {
-      write_mesh_stl(*scene.container.mesh, (d / yade_files::kMesh).string());
+    if (scene.container.kind == ContainerKind::Mesh || scene.container.kind == ContainerKind::Drum) {
+      write_mesh_stl(scene.container.kind == ContainerKind::Mesh ? *scene.container.mesh
+                                                                 : *drum_mesh(scene.container, scene.dimension, packing.grains),
+                     (d / yade_files::kMesh).string());
       written.push_back((d / yade_files::kMesh).string());
     }
     return written;
@@ -78,6 +81,10 @@ class YadeAdapter : public EngineAdapter {
   }
 
   // The script exits with status 1 after writing a "failed" status with its failure_kind.
+  Grains read_snapshot(const std::string& dir, std::size_t k, const Packing& original) const override {
+    return yade_read_snapshot(dir, k, original);
+  }
+
   std::optional<EngineFailure> failure_after_exit(const std::string& dir, const Packing& original, const Scene& scene,
                                                   const RelaxPlan&) const override {
     return yade_failure_after_exit(dir, original, scene);

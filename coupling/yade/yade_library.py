@@ -627,6 +627,42 @@ def release(rule):
     rule.end_release()
 
 
+def rotate(rotation):
+    """A rotating drum (ROTATION; the LIGGGHTS script's runs, snapshot for snapshot): the drum's facets turn about
+    its axis (along y through x = 0, z = axis_z) at omega rad/s, lowest line towards +x (a rotation about -y),
+    set by a RotationEngine before NewtonIntegrator; after each snapshot's step count the grains' positions go to
+    yade_rot_K.csv. The kinetic energy is sampled there and bounded as in a relaxation. Returns "max-time"."""
+    global _loop_seconds
+    from yade import RotationEngine
+    newton = next(i for i, e in enumerate(O.engines) if isinstance(e, NewtonIntegrator))
+    O.engines = O.engines[:newton] + [RotationEngine(ids=list(_walls), rotationAxis=(0.0, -1.0, 0.0),
+                                                     angularVelocity=rotation["omega"], rotateAroundZero=True,
+                                                     zeroPoint=(0.0, 0.0, rotation["axis_z"]), label="drum")] + \
+        O.engines[newton:]
+    log("drum rotation: %.6g rad/s about y = axis through (0, 0, %.6g), %d facets, snapshots at steps %s" % (
+        rotation["omega"], rotation["axis_z"], len(_walls), rotation["snapshot_steps"]))
+    t0 = time.time()
+    done = 0
+    for k, steps in enumerate(rotation["snapshot_steps"]):
+        O.run(steps - done, True)
+        done = steps
+        e = translational_kinetic_energy()
+        _history.append((O.time, e))
+        if not math.isfinite(e):
+            raise RunFailure("non-finite kinetic energy at t = %.6g s" % O.time, "non_finite")
+        if e > KINETIC_BOUND:
+            raise RunFailure("kinetic energy %.6g J above the bound %.6g J at t = %.6g s" % (e, KINETIC_BOUND, O.time),
+                             "blow_up")
+        lines = ["id,x,y,z"]
+        for gid, bid in _grains:
+            p = O.bodies[bid].state.pos
+            lines.append("%d,%.17g,%.17g,%.17g" % (gid, p[0], p[1], p[2]))
+        write_atomically("yade_rot_%d.csv" % (k + 1), "\n".join(lines) + "\n")
+        log("BTR-SNAPSHOT %d t = %.6g s, %d steps, process time %.3f s" % (k + 1, O.time, O.iter, time.process_time()))
+    _loop_seconds = time.time() - t0
+    return "max-time"
+
+
 def relax():
     """Runs the relaxation in one O.run() call (the StopRule's PyRunner pauses it) and returns the stop
     reason; the wall time of the loop alone is in _loop_seconds."""
@@ -647,6 +683,8 @@ def relax():
         log("pour: %d batches from the lattice, drop gap %.6g m; the stop rule runs after the last" % (
             len(POUR["batches"]), POUR["drop_gap"]))
     _history.append((0.0, sum(0.5 * O.bodies[b].state.mass * O.bodies[b].state.vel.squaredNorm() for _, b in _grains)))
+    if globals().get("ROTATION"):
+        return rotate(ROTATION)
     _rule = StopRule()
     # PyRunner commands run in __main__, which is not this script's namespace under the `yade` launcher.
     import __main__

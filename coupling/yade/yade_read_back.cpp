@@ -262,4 +262,27 @@ RelaxResult yade_read_back(const std::string& dir, const Packing& original, cons
   return result;
 }
 
+std::string yade_snapshot_file(std::size_t k) { return "yade_rot_" + std::to_string(k) + ".csv"; }
+
+Grains yade_read_snapshot(const std::string& dir, std::size_t k, const Packing& original) {
+  const Reader in(dir);
+  const std::string name = yade_snapshot_file(k);
+  const auto rows = in.csv(name.c_str(), "id,x,y,z");
+  const std::size_t n = original.grains.size();
+  if (rows.size() != n)
+    in.fail("lost grains: " + name + " has " + std::to_string(rows.size()) + " grains, the packing " + std::to_string(n),
+            FailureKind::LostGrains, {{"grains", n}, {"returned", rows.size()}});
+  Grains out = original.grains;
+  std::vector<char> seen(n, 0);
+  for (const auto& r : rows) {
+    const double id = r[0];
+    if (id < 1 || id > static_cast<double>(n) || id != std::floor(id) || seen[static_cast<std::size_t>(id) - 1])
+      in.fail(name + ": unexpected or repeated grain id " + std::to_string(id));
+    const std::size_t i = static_cast<std::size_t>(id) - 1;
+    seen[i] = 1;
+    out[i].x = Vec3(r[1], r[2], r[3]);
+  }
+  return out;
+}
+
 }  // namespace btr

@@ -26,6 +26,7 @@
 #include "btr/model/number_text.h"
 #include "coupling/dem/check_schedule.h"
 #include "coupling/dem/dem_walls.h"
+#include "coupling/dem/drum_mesh.h"
 #include "coupling/dem/materials.h"
 #include "coupling/dem/relax_plan.h"
 #include "coupling/dem/timestep.h"
@@ -193,6 +194,16 @@ std::string pour_constant(const RelaxPlan& plan) {
          num(p.release_time) + " s)\n";
 }
 
+std::string rotation_constant(const RelaxPlan& plan) {
+  const DrumRotation& r = plan.rotation;
+  if (!r.enabled) return "ROTATION = None  # not a rotating drum\n";
+  std::string steps;
+  for (long n : r.snapshot_steps) steps += (steps.empty() ? "" : ", ") + std::to_string(n);
+  return "ROTATION = dict(  # btr drum --engine yade: the drum's facets turn about its axis (along y through x = 0,\n"
+         "    # z = axis_z) at omega rad/s, lowest line towards +x (about -y); positions written at each step count\n"
+         "    omega=" + num(r.omega) + ", axis_z=" + num(r.axis_z) + ", snapshot_steps=[" + steps + "])\n";
+}
+
 const char* kHeader = R"(#
 # Run it in one of two ways (every file is read from and written to this script's folder):
 #   PYTHONPATH=/usr/lib/x86_64-linux-gnu/yade-double/py OMP_NUM_THREADS=1 /usr/bin/python3 relax_yade.py
@@ -307,7 +318,7 @@ std::string yade_script(const Packing& packing, const Scene& scene, const RelaxP
                                 ", " + num(plan.region_hi[1]) + ")  # open floor: x0, x1, y0, y1 [m]; grains leaving it are removed"
                           : std::string("None  # no removal region (not an open floor)"))
       << "\n"
-      << compaction_constant(plan, packing.grains, sched) << pour_constant(plan)
+      << compaction_constant(plan, packing.grains, sched) << pour_constant(plan) << rotation_constant(plan)
       << "VERLET_DIST = " << num(verlet) << "  # m, collider's bounding-box margin: "
       << (verlet < 0.5 * st.r_min ? "below half the period with the largest grain" : "0.5 r_min") << "\n\n\n"
       << "def scene():\n";
@@ -348,8 +359,13 @@ std::string yade_script(const Packing& packing, const Scene& scene, const RelaxP
     if (w.kind == DemWall::Kind::Plane) {
       out << "    add_plane(axis=" << w.axis << ", position=" << num(w.position) << ")  # " << w.name << "\n";
     } else if (w.kind == DemWall::Kind::Mesh) {
-      out << "    add_mesh(" << py_string(yade_files::kMesh) << ")  # the container's " << w.triangles->triangles.size()
-          << " triangles, from " << py_string(w.triangles->file) << "\n";
+      if (w.triangles)
+        out << "    add_mesh(" << py_string(yade_files::kMesh) << ")  # the container's " << w.triangles->triangles.size()
+            << " triangles, from " << py_string(w.triangles->file) << "\n";
+      else  // a drum: its panels for these grains (drum_mesh.h), written beside the script by the adapter
+        out << "    add_mesh(" << py_string(yade_files::kMesh) << ")  # the drum's "
+            << drum_mesh(box, scene.dimension, packing.grains)->triangles.size() << " triangles, "
+            << drum_panels(box.radius, st.r_min) << " panels tangent to its cylinder\n";
     } else {
       const double height = box.height > 0 ? box.height : 2.0 * st.top;
       out << "    add_cylinder(radius=" << num(w.position) << ", height=" << num(height)

@@ -21,6 +21,12 @@ constexpr const char* kContacts = "yade_contacts.csv";  // i,j,fn,overlap (j = 0
 constexpr const char* kLog = "yade.log";
 }  // namespace yade_files
 
+// A rotating drum's snapshot k (1-based, DrumRotation): "yade_rot_K.csv" (id,x,y,z).
+std::string yade_snapshot_file(std::size_t k);
+
+// Reads snapshot k of a rotating drum's run in dir (EngineAdapter::read_snapshot).
+Grains yade_read_snapshot(const std::string& dir, std::size_t k, const Packing& original);
+
 // Where Debian installs the `yade` Python module (package yade, double precision build).
 constexpr const char* kYadePythonPath = "/usr/lib/x86_64-linux-gnu/yade-double/py";
 

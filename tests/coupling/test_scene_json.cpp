@@ -160,9 +160,10 @@ TEST(SceneJson, ErrorsNameTheOriginAndTheKey) {
 namespace btr {
 namespace {
 
-// A drum's ends survive the JSON (a reader that dropped them would read "walls" back), are refused on
-// another container, and the DEM export of a drum names its ends when it refuses.
-TEST(SceneJson, DrumEndsRoundTripAndDemExportIsRefused) {
+// A drum's ends and speed survive the JSON (a reader that dropped them would read "walls" back), ends are
+// refused on another container, and the DEM walls of a drum are its surface alone: the exact cylinder, and the
+// end walls only when it has them.
+TEST(SceneJson, DrumEndsRoundTripAndDemWalls) {
   Scene s = load_scene(std::string(BTR_SOURCE_DIR) + "/inputs/drum3d_periodic.toml");
   ASSERT_TRUE(s.container.periodic_ends);
   nlohmann::json j = scene_to_json(s);
@@ -177,17 +178,26 @@ TEST(SceneJson, DrumEndsRoundTripAndDemExportIsRefused) {
   box["container"]["ends"] = "periodic";
   EXPECT_NE(error_of(box).find("in a hele-shaw container"), std::string::npos) << error_of(box);
 
-  for (bool periodic : {true, false}) {
+  s.drum->froude = 0.004;
+  EXPECT_EQ(scene_from_json(scene_to_json(s), "p.json").drum->froude, 0.004);
+  EXPECT_FALSE(scene_from_json(scene_to_json(s), "p.json").drum->rpm);
+  const double R = s.container.radius, half = 0.5 * s.container.size_y;
+  s.container.periodic_ends = true;
+  try {
+    dem_walls(s.container, 3);
+    ADD_FAILURE() << "a drum with periodic ends was exported";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("container 'drum' (periodic ends)"), std::string::npos) << e.what();
+  }
+  for (bool periodic : {false}) {
     s.container.periodic_ends = periodic;
-    try {
-      dem_walls(s.container, 3);
-      ADD_FAILURE() << "a drum was exported";
-    } catch (const std::runtime_error& e) {
-      const std::string msg = e.what();
-      EXPECT_NE(msg.find(periodic ? "container 'drum' (periodic ends)" : "container 'drum' (flat end walls)"),
-                std::string::npos) << msg;
-      EXPECT_NE(msg.find("not supported"), std::string::npos) << msg;
-    }
+    const std::vector<DemWall> walls = dem_walls(s.container, 3);
+    ASSERT_EQ(walls.size(), 1u);  // no floor: the drum's lowest line turns with it
+    EXPECT_EQ(walls[0].name, "drum");
+    EXPECT_NEAR(walls[0].distance(Vec3(0.0, 0.0, R)), periodic ? R : std::min(R, half), 1e-15);
+    EXPECT_NEAR(walls[0].distance(Vec3(0.3 * R, 0.0, R - 0.4 * R)), periodic ? 0.5 * R : std::min(0.5 * R, half), 1e-15);
+    EXPECT_LT(walls[0].distance(Vec3(0.0, 0.0, -1e-4)), 0.0);  // below the lowest line: outside
+    EXPECT_EQ(walls[0].distance(Vec3(0.0, half * 1.01, R)) < 0.0, !periodic);  // beyond an end wall
   }
 }
 
