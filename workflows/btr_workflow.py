@@ -12,7 +12,7 @@
   nano-powder [-o OUTDIR] [--cycles N]    rigid clusters redeposited: <h> = a - b exp(-n/tau) (2D, 3D)
   stratification [-o OUTDIR] [--tiny]     two-species heap in a Hele-Shaw cell: stripes, top-toe segregation, BTR vs DEM
   settle-matrix -o OUTDIR [--count N]     btr settle against reference pours over beds and heaps (docs/settle)
-  dynamic-vs-dem [-o OUTDIR] [--tiny]     dynamic BTR against DEM: drum segregation, Brazil nut, cost per revolution
+  dynamic-vs-dem [-o OUTDIR] [--plan P]   dynamic BTR against DEM: drum segregation, Brazil nut, cost per revolution
 
 The `btr` program is $BTR_BINARY, else build/app/btr. Exit status: 0 done, 2 bad input, 3 a step failed
 (its error is printed and recorded in OUTDIR/run.json; what earlier steps wrote is kept)."""
@@ -197,7 +197,8 @@ def main(argv=None) -> int:
     dv.add_argument("-o", "--out", help="output folder (default out/dynamic_vs_dem)")
     dv.add_argument("--engine", choices=["liggghts", "yade"], default="liggghts",
                     help="the drum's DEM engine (the Brazil nut always taps in LIGGGHTS)")
-    dv.add_argument("--tiny", action="store_true", help="one 2D drum for a tenth of a revolution, one Phi, one tap")
+    dv.add_argument("--plan", choices=["full", "reduced", "tiny"], default="full",
+                    help="full: the issue's matrix (hours); reduced: about half an hour of 2 cores; tiny: for tests")
     dv.add_argument("--seeds", default="1,2,3", help="comma-separated seeds of each side (default 1,2,3)")
     dv.add_argument("--parts", default="drum,brazil,cost", help="some of drum, brazil, cost (default all)")
     dv.add_argument("--np", type=int, default=1)
@@ -335,7 +336,7 @@ def main(argv=None) -> int:
                                  f"{args.seeds!r}, {args.parts!r}")
             if args.np < 1:
                 raise InputError(f"--np: expected a positive number of ranks, got {args.np}")
-            run_dynamic_vs_dem(args.out, args.engine, args.tiny, seeds, args.np, tuple(parts), progress)
+            run_dynamic_vs_dem(args.out, args.engine, args.plan, seeds, args.np, tuple(parts), progress)
     except Interrupted as e:
         print(f"btr_workflow.py {args.command}: {e}: the program it ran was stopped; run.json and the tables "
               "record the interrupted case", file=sys.stderr)

@@ -48,7 +48,7 @@ def test_comparison_in_dem_scatter_units():
              "cpu_per_rev": 500.0},
             {"case": "c", "side": "liggghts", "froude": 0.01, "seed": 3, "status": "fail", "reason": "x"}]
     comp = {c["measure"]: c for c in dvr.comparison(rows)}
-    core = comp["core index, last rev"]
+    core = comp["core index (last rev)"]
     assert core["dem_n"] == 2  # the failed run is left out
     assert core["dem_mean"] == pytest.approx(0.25)
     assert core["dem_sd"] == pytest.approx(math.sqrt(0.005))
@@ -65,7 +65,7 @@ def test_bad_parts_refused(tmp_path, source_dir):
 
 
 def test_tiny_study_runs_both_sides(tmp_path, btr_binary, liggghts):
-    res = dvd.run_dynamic_vs_dem(tmp_path, "liggghts", tiny=True, seeds=(1,), parts=("drum", "brazil"),
+    res = dvd.run_dynamic_vs_dem(tmp_path, "liggghts", "tiny", seeds=(1,), parts=("drum", "brazil"),
                                  progress=lambda *_: None)
     assert [(r["side"], r["status"]) for r in res["drum"]] == [("btr", "ok"), ("liggghts", "ok")], res["drum"]
     assert [(r["side"], r["status"]) for r in res["brazil"]] == [("btr", "ok"), ("liggghts", "ok")], res["brazil"]
@@ -75,7 +75,7 @@ def test_tiny_study_runs_both_sides(tmp_path, btr_binary, liggghts):
     assert res["brazil"][1]["cycles"] == 1
     with open(tmp_path / "drum_vs_dem.csv") as f:
         measures = {r["measure"] for r in csv.DictReader(f)}
-    assert "core index, last rev" in measures
+    assert "core index (last rev)" in measures
     text = (tmp_path / "report.md").read_text()
     assert "Dynamic BTR against DEM" in text and "liggghts" in text
     assert (tmp_path / "segregation_vs_dem.png").exists() and (tmp_path / "intruder_vs_dem.png").exists()

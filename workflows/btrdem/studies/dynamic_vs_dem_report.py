@@ -15,7 +15,7 @@ DRUM_KEYS = ["case", "side", "froude", "seed", "dimension", "grains", "status", 
 BRAZIL_KEYS = ["case", "phi", "side", "seed", "status", "reason", "cycles", "z0_d", "z_end_d", "rise_d_per_cycle",
                "cpu_per_cycle"]
 COST_KEYS = ["case", "side", "grains", "froude", "revolutions_run", "status", "reason", "cpu_per_rev"]
-MEASURES = [("core_end", "core index, last rev"), ("segregation_end", "radial index, last rev"),
+MEASURES = [("core_end", "core index (last rev)"), ("segregation_end", "radial index (last rev)"),
             ("core_t90_rev", "rev to 90 % of core index"), ("dynamic_angle_deg", "dynamic angle [deg]"),
             ("cpu_per_rev", "CPU s per rev")]
 AGREE = 2.0
