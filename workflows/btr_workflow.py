@@ -202,6 +202,9 @@ def main(argv=None) -> int:
     dv.add_argument("--seeds", default="1,2,3", help="comma-separated seeds of each side (default 1,2,3)")
     dv.add_argument("--parts", default="drum,brazil,cost", help="some of drum, brazil, cost (default all)")
     dv.add_argument("--np", type=int, default=1)
+    dv.add_argument("--dims", default="2,3", help="the drum cases' dimensions: 2, 3 or 2,3 (default)")
+    dv.add_argument("--reuse-runs", action="store_true",
+                    help="reuse the drum runs already finished in OUT/runs from the same scene and arguments")
 
     args = ap.parse_args(argv)
     if getattr(args, "out", None):
@@ -336,7 +339,11 @@ def main(argv=None) -> int:
                                  f"{args.seeds!r}, {args.parts!r}")
             if args.np < 1:
                 raise InputError(f"--np: expected a positive number of ranks, got {args.np}")
-            run_dynamic_vs_dem(args.out, args.engine, args.plan, seeds, args.np, tuple(parts), progress)
+            dims = tuple(int(x) for x in args.dims.split(",") if x in ("2", "3"))
+            if not dims or len(dims) != len([x for x in args.dims.split(",") if x]):
+                raise InputError(f"--dims: expected 2, 3 or 2,3; got {args.dims!r}")
+            run_dynamic_vs_dem(args.out, args.engine, args.plan, seeds, args.np, tuple(parts), progress,
+                               reuse_runs=args.reuse_runs, dims=dims)
     except Interrupted as e:
         print(f"btr_workflow.py {args.command}: {e}: the program it ran was stopped; run.json and the tables "
               "record the interrupted case", file=sys.stderr)

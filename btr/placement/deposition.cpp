@@ -28,6 +28,8 @@ constexpr double kSkipTangency = 1e-9;
 // A contact touched at the start of a path is met only if the path heads into it at least this
 // steeply (cosine of the angle with its normal); below it the path is tangent up to round-off.
 constexpr double kApproach = 1e-9;
+// Events in a row without the grain moving, its contacts cycling, after which it is wedged (place()).
+constexpr int kWedgedEvents = 12;
 
 // splitmix64: a deterministic hash for tie-breaks (which way a grain balanced on a top rolls).
 std::uint64_t mix(std::uint64_t z) {
@@ -147,7 +149,8 @@ struct Deposition::Impl {
   const Grain& place(const Drop& drop);
   void fall(Vec3& x, double r, Contacts& active, const std::vector<Obstacle>& walls);
   void roll_on_arc(Vec3& x, double r, Contacts& active, const CircleArc& arc, const std::vector<Obstacle>& walls);
-  bool roll_along_drum(Vec3& x, double r, Contacts& active, int sphere, int drum, const std::vector<Obstacle>& walls);
+  bool roll_along_drum(Vec3& x, double r, Contacts& active, int sphere, int drum, const Vec3& d,
+                       const std::vector<Obstacle>& walls);
   bool drum_rest(const Vec3& x, const Contacts& active) const;
   void drum_start(Vec3& x, double z, double r) const;
   bool roll_along_cylinder(Vec3& x, double r, Contacts& active, int sphere, int cylinder, const Vec3& d,
@@ -535,14 +538,17 @@ bool Deposition::Impl::drum_rest(const Vec3& x, const Contacts& active) const {
 // located by bisection. y comes from the support: y = y_p +- sqrt(R_p^2 - (x - x_p)^2 - (z - z_p)^2).
 // The path goes down, towards theta = 0; it ends at theta = 0 or where the two branches meet (y = y_p),
 // the lowest point of the closed curve. Returns true when the grain comes to rest there.
-bool Deposition::Impl::roll_along_drum(Vec3& x, double r, Contacts& active, int si, int di,
+bool Deposition::Impl::roll_along_drum(Vec3& x, double r, Contacts& active, int si, int di, const Vec3& d,
                                        const std::vector<Obstacle>& walls) {
   const Obstacle p = active.item[si];
   const Obstacle drum = active.item[di];
   const double Rc = drum.R, za = drum.c.z();
   double theta = std::atan2(x.x(), za - x.z());
-  const double sign = theta > 0.0 ? -1.0 : 1.0;
-  const double yside = x.y() >= p.c.y() ? 1.0 : -1.0;
+  const double start = theta, sign = theta > 0.0 ? -1.0 : 1.0;
+  // The branch the grain is on; where the branches meet (y = y_p, up to round-off), the one the descent
+  // takes (switching branch there moves the grain by at most 2e-8 r, along the contact with p).
+  const double dy0 = x.y() - p.c.y();
+  const double yside = std::abs(dy0) <= 1e-8 * r && d.y() != 0.0 ? (d.y() > 0.0 ? 1.0 : -1.0) : (dy0 >= 0.0 ? 1.0 : -1.0);
   auto at = [&](double f) -> std::pair<Vec3, bool> {
     Vec3 P(Rc * std::sin(f), 0.0, za - Rc * std::cos(f));
     const double s = p.R * p.R - (P.x() - p.c.x()) * (P.x() - p.c.x()) - (P.z() - p.c.z()) * (P.z() - p.c.z());
@@ -576,7 +582,8 @@ bool Deposition::Impl::roll_along_drum(Vec3& x, double r, Contacts& active, int 
   const double reach = 2.0 * r + 2.0 * r_max;
   for (int chunk = 0; chunk < 1000; ++chunk) {
     candidates.clear();
-    const Vec3 here = at(theta).first;
+    // The first chunk from x itself: at(start) may be off the path where the branches meet (s < 0).
+    const Vec3 here = chunk == 0 ? x : at(theta).first;
     // In x-z the centre stays on the drum's circle, within `travel` of here for the chunk's 20 steps.
     const double travel = 20 * std::abs(step) * Rc;
     const Vec3 span = Vec3::Constant(reach + travel);
@@ -595,7 +602,10 @@ bool Deposition::Impl::roll_along_drum(Vec3& x, double r, Contacts& active, int 
         const double fm = 0.5 * (f0 + f1);
         (condition(fm) == 0 ? f0 : f1) = fm;
       }
-      x = at(f0).first;
+      // No progress: the grain stays where it is. (Where the branches meet, y = y_p +- sqrt(s) turns s's
+      // round-off into up to ~1e-6 r of y: the path's start can lie a hair into an end wall the grain touches,
+      // or off the path, s < 0.)
+      if (f0 != start) x = at(f0).first;
       switch (condition(f1)) {
         case 1: {
           const Vec3 P1 = at(f1).first;
@@ -690,8 +700,20 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
   bool stable = false;
   int drum_stalls = 0;
   Vec3 blocked_tie = Vec3::Zero();  // the last tie-break roll that could not move the grain
+  Vec3 last = x;
+  int still = 0, still_contacts = 0;  // events in a row that left the grain where it was; most contacts then
   for (int event = 0; event < max_events && !stable; ++event) {
     if (active.overflow) throw too_many_contacts(id, x);
+    // Wedged: the descent drops a support that the next event, not having moved the grain, finds again at
+    // once (their tolerances disagree at round-off, next to a flat wall), round after round. With as many
+    // contacts as the dimension touched in that place, the grain rests there.
+    still = event > 0 && (x - last).squaredNorm() <= 1e-24 * r * r ? still + 1 : 0;
+    still_contacts = still ? std::max(still_contacts, active.n) : active.n;
+    last = x;
+    if (still >= kWedgedEvents && still_contacts >= dimension) {
+      stable = true;
+      break;
+    }
     bool tied = false;
     const Vec3 before_event = x;
     Vec3 normals[kMaxContacts];
@@ -763,7 +785,7 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
         continue;
       }
       if (spheres == 1 && planes == 0 && cylinders == 0 && dimension == 3) {
-        if (roll_along_drum(x, r, active, si, di, walls)) stable = true;
+        if (roll_along_drum(x, r, active, si, di, d, walls)) stable = true;
         continue;
       }
     }

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 
 #include "btr/dynamics/drum.h"
 #include "btr/measures/metrics.h"
@@ -169,6 +170,33 @@ TEST(DrumPeriodicEnds, StepsKeepPackingsValid3D) {
   EXPECT_TRUE(near_end);
   const Grains a = stepper.step(g, 0.05), b = stepper.step(g, 0.05);
   for (std::size_t i = 0; i < a.size(); ++i) ASSERT_EQ(a[i].x, b[i].x);
+}
+
+// Drum steps with flat end walls and a bidisperse fill (radii 1 and 2, half the solid in each, as the
+// dynamic-vs-dem study's 3D drum): small spheres pile against the end walls, where a sphere rolling on the
+// drum wall and on a sphere that touches the end wall too starts where its path's two branches meet (the
+// case that once ended a hair inside the end wall or off the path). Every step stays valid.
+TEST(DrumWall, BidisperseStepsAgainstEndWallsStayValid3D) {
+  const Container c = drum(20.0, 12.0);
+  DrumStepper stepper(3, c, 2.0);
+  Deposition dep(3, c, 2.0);
+  std::uint64_t state = 12345;
+  auto uniform = [&state] {  // a fixed LCG: the same drops on every platform
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(state >> 11) * 0x1p-53;
+  };
+  for (int i = 0; i < 550; ++i) {
+    const double r = i % 9 == 0 ? 2.0 : 1.0;  // 8 small per large: equal solid
+    dep.place(Drop{(uniform() - 0.5) * 2.0 * (20.0 - 2.0 * r), (uniform() - 0.5) * (12.0 - 2.0 * r), r, r > 1.5 ? 2 : 1});
+  }
+  Grains g = dep.grains();
+  ASSERT_TRUE(check_packing(g, 3, c).ok());
+  for (int s = 0; s < 60; ++s) {
+    ASSERT_NO_THROW(g = stepper.step(g, 2.0 * M_PI / 100.0)) << "step " << s;
+    const CheckReport rep = check_packing(g, 3, c);
+    ASSERT_TRUE(rep.ok()) << "step " << s << ": " << rep.overlaps << " overlaps, " << rep.unsupported
+                          << " unsupported, " << rep.outside << " outside";
+  }
 }
 
 // The self-check's drum geometry is its own: a grain touching the wall is supported there, one pushed

@@ -79,3 +79,15 @@ def test_tiny_study_runs_both_sides(tmp_path, btr_binary, liggghts):
     text = (tmp_path / "report.md").read_text()
     assert "Dynamic BTR against DEM" in text and "liggghts" in text
     assert (tmp_path / "segregation_vs_dem.png").exists() and (tmp_path / "intruder_vs_dem.png").exists()
+    # --reuse-runs: the finished drum runs are read back, not run again; a changed scene is run again.
+    said = []
+    again = dvd.run_dynamic_vs_dem(tmp_path, "liggghts", "tiny", seeds=(1,), parts=("drum",), progress=said.append,
+                                   reuse_runs=True)
+    assert sum("reused the run finished" in str(m) for m in said) == 2, said
+    assert [r["core_end"] for r in again["drum"]] == [r["core_end"] for r in res["drum"]]
+    run = tmp_path / "runs" / "drum2d_low" / "drum2d_low_btr_s1"
+    scene = dvd.read_json(run / dvd.FINISHED)["scene"]
+    argv = ["btr"] + dvd.read_json(run / dvd.FINISHED)["argv"]
+    assert dvd.finished_run(run, scene, argv) is not None
+    scene["drum"]["revolutions"] = 0.2
+    assert dvd.finished_run(run, scene, argv) is None
