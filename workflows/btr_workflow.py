@@ -203,6 +203,9 @@ def main(argv=None) -> int:
     dv.add_argument("--parts", default="drum,brazil,cost", help="some of drum, brazil, cost (default all)")
     dv.add_argument("--np", type=int, default=1)
     dv.add_argument("--dims", default="2,3", help="the drum cases' dimensions: 2, 3 or 2,3 (default)")
+    dv.add_argument("--report-only", action="store_true",
+                    help="with --parts drum: tables and report from the runs finished in OUT/runs, the rest "
+                         "rows 'not run'; runs nothing")
     dv.add_argument("--reuse-runs", action="store_true",
                     help="reuse the drum runs already finished in OUT/runs from the same scene and arguments")
 
@@ -343,7 +346,7 @@ def main(argv=None) -> int:
             if not dims or len(dims) != len([x for x in args.dims.split(",") if x]):
                 raise InputError(f"--dims: expected 2, 3 or 2,3; got {args.dims!r}")
             run_dynamic_vs_dem(args.out, args.engine, args.plan, seeds, args.np, tuple(parts), progress,
-                               reuse_runs=args.reuse_runs, dims=dims)
+                               reuse_runs=args.reuse_runs, dims=dims, report_only=args.report_only)
     except Interrupted as e:
         print(f"btr_workflow.py {args.command}: {e}: the program it ran was stopped; run.json and the tables "
               "record the interrupted case", file=sys.stderr)

@@ -3,6 +3,7 @@ scatter-unit comparison on curves with known answers, and a tiny run of the whol
 (BTR and LIGGGHTS) with every run a row."""
 import csv
 import math
+import shutil
 import subprocess
 import sys
 
@@ -91,3 +92,14 @@ def test_tiny_study_runs_both_sides(tmp_path, btr_binary, liggghts):
     assert dvd.finished_run(run, scene, argv) is not None
     scene["drum"]["revolutions"] = 0.2
     assert dvd.finished_run(run, scene, argv) is None
+    # --report-only from the runs moved to another folder: the finished ones are read, the others "not run".
+    moved = tmp_path / "moved"
+    shutil.copytree(tmp_path / "runs", moved / "runs")
+    only = dvd.run_dynamic_vs_dem(moved, "liggghts", "tiny", seeds=(1, 2), parts=("drum",), progress=lambda *_: None,
+                                  report_only=True)
+    assert [(r["side"], r["seed"], r["status"]) for r in only["drum"]] == \
+        [("btr", 1, "ok"), ("btr", 2, "not run"), ("liggghts", 1, "ok")], only["drum"]
+    assert only["drum"][0]["core_end"] == res["drum"][0]["core_end"]
+    assert "not run" in (moved / "report.md").read_text()
+    with pytest.raises(dvd.InputError, match="--report-only"):
+        dvd.run_dynamic_vs_dem(moved, "liggghts", "tiny", parts=("drum", "brazil"), report_only=True)

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.io import read_json, write_json, write_scene_toml
+from ..core.io import InputError, read_json, write_json, write_scene_toml
 from ..core.runner import REPO, RunRecord, StepFailed, find_btr, run_command
 from . import dynamic_vs_dem_report as out_report
 from .brazil_nut import read_cycles, scene_dict as brazil_scene
@@ -116,9 +116,14 @@ def drum_summary(t: dict, steps_per_rev: int) -> dict:
 FINISHED = "finished_run.json"
 
 
+def _arguments(d: Path, argv: list) -> list:
+    """The run's arguments without the program, its own folder written "." (a run folder can be moved)."""
+    return [str(a).replace(str(d), ".") for a in argv[1:]]
+
+
 def mark_finished(d: Path, scene: dict, argv: list, cpu_seconds: float):
     """Written after a run exited 0: what ran (scene and arguments) and its processor time, for --reuse-runs."""
-    write_json(d / FINISHED, {"scene": scene, "argv": [str(a) for a in argv[1:]], "cpu_seconds": cpu_seconds})
+    write_json(d / FINISHED, {"scene": scene, "argv": _arguments(d, argv), "cpu_seconds": cpu_seconds})
 
 
 def finished_run(d: Path, scene: dict, argv: list) -> dict | None:
@@ -128,7 +133,7 @@ def finished_run(d: Path, scene: dict, argv: list) -> dict | None:
     if not p.exists():
         return None
     done = read_json(p)
-    same = done.get("scene") == json.loads(json.dumps(scene)) and done.get("argv") == [str(a) for a in argv[1:]]
+    same = done.get("scene") == json.loads(json.dumps(scene)) and done.get("argv") == _arguments(d, argv)
     return done if same else None
 
 
@@ -138,9 +143,9 @@ def dem_cpu_per_rev(d: Path) -> float:
 
 
 class Study:
-    def __init__(self, outdir, engine, plan, seeds, np_, progress, reuse=False):
+    def __init__(self, outdir, engine, plan, seeds, np_, progress, reuse=False, report_only=False):
         self.out, self.engine, self.plan, self.seeds, self.np = Path(outdir), engine, plan, seeds, np_
-        self.progress, self.reuse = progress, reuse
+        self.progress, self.reuse, self.report_only = progress, reuse or report_only, report_only
         self.btr = find_btr()
         self.drum_rows, self.brazil_rows, self.cost_rows = [], [], []
         self.series = {}  # run tag -> (x, y) for the figures
@@ -176,6 +181,9 @@ class Study:
             if done is not None:
                 self.progress(f"  [drum {tag}] reused the run finished in {d}")
                 res = {"cpu_seconds": done["cpu_seconds"]}
+            elif self.report_only:
+                row.update(status="not run", reason=f"no finished run in runs/{case}/{tag} (--report-only)")
+                return
             else:
                 (d / FINISHED).unlink(missing_ok=True)
                 write_scene_toml(path, sc)
@@ -271,15 +279,19 @@ class Study:
 
 def run_dynamic_vs_dem(outdir=None, engine: str = "liggghts", plan_name: str = "full", seeds=(1, 2, 3), np_: int = 1,
                        parts=("drum", "brazil", "cost"), progress=print, reuse_runs: bool = False,
-                       dims=(2, 3)) -> dict:
+                       dims=(2, 3), report_only: bool = False) -> dict:
+    """report_only: the drum cases' tables from the runs finished in outdir/runs (as --reuse-runs finds them),
+    the others rows "not run"; nothing is run."""
+    if report_only and tuple(parts) != ("drum",):
+        raise InputError(f"--report-only: only with --parts drum (got {','.join(parts)})")
     outdir = Path(outdir) if outdir else REPO / "out" / "dynamic_vs_dem"
     plan = copy.deepcopy(PLANS[plan_name])
     plan["drum"] = [p for p in plan["drum"] if p["dim"] in dims]
     seeds = list(seeds)
     rec = RunRecord(outdir, "dynamic-vs-dem", progress=progress, btr=find_btr(),
                     settings={"engine": engine, "plan_name": plan_name, "seeds": seeds, "np": np_, "parts": list(parts),
-                              "plan": plan, "reuse_runs": reuse_runs, "dims": list(dims)})
-    study = Study(outdir, engine, plan, seeds, np_, progress, reuse_runs)
+                              "plan": plan, "reuse_runs": reuse_runs, "dims": list(dims), "report_only": report_only})
+    study = Study(outdir, engine, plan, seeds, np_, progress, reuse_runs, report_only)
     study.write()
     if "drum" in parts:
         study.drum_cases(rec)
