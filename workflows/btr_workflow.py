@@ -200,7 +200,9 @@ def main(argv=None) -> int:
     dv.add_argument("--plan", choices=["full", "reduced", "tiny"], default="full",
                     help="full: the issue's matrix (hours); reduced: about half an hour of 2 cores; tiny: for tests")
     dv.add_argument("--seeds", default="1,2,3", help="comma-separated seeds of each side (default 1,2,3)")
-    dv.add_argument("--parts", default="drum,brazil,cost", help="some of drum, brazil, cost (default all)")
+    dv.add_argument("--parts", default="drum,brazil,cost",
+                    help="some of drum, brazil, cost, mapping (BTR's steps per revolution and lift swept against "
+                         "the drum's DEM runs); default drum,brazil,cost")
     dv.add_argument("--np", type=int, default=1)
     dv.add_argument("--dims", default="2,3", help="the drum cases' dimensions: 2, 3 or 2,3 (default)")
     dv.add_argument("--report-only", action="store_true",
@@ -337,8 +339,8 @@ def main(argv=None) -> int:
             except ValueError:
                 raise InputError(f"--seeds: expected comma-separated integers, got {args.seeds!r}") from None
             parts = [x for x in args.parts.split(",") if x]
-            if not seeds or not parts or any(x not in ("drum", "brazil", "cost") for x in parts):
-                raise InputError(f"--seeds/--parts: expected seeds and some of drum, brazil, cost; got "
+            if not seeds or not parts or any(x not in ("drum", "brazil", "cost", "mapping") for x in parts):
+                raise InputError(f"--seeds/--parts: expected seeds and some of drum, brazil, cost, mapping; got "
                                  f"{args.seeds!r}, {args.parts!r}")
             if args.np < 1:
                 raise InputError(f"--np: expected a positive number of ranks, got {args.np}")

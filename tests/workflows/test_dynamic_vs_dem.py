@@ -95,8 +95,14 @@ def test_tiny_study_runs_both_sides(tmp_path, btr_binary, liggghts):
     # --report-only from the runs moved to another folder: the finished ones are read, the others "not run".
     moved = tmp_path / "moved"
     shutil.copytree(tmp_path / "runs", moved / "runs")
-    only = dvd.run_dynamic_vs_dem(moved, "liggghts", "tiny", seeds=(1, 2), parts=("drum",), progress=lambda *_: None,
-                                  report_only=True)
+    only = dvd.run_dynamic_vs_dem(moved, "liggghts", "tiny", seeds=(1, 2), parts=("drum", "mapping"),
+                                  progress=lambda *_: None, report_only=True)
+    # The mapping's BTR runs ran (one setting, two seeds) and are set against the DEM Froude number of the case.
+    assert [(r["steps_per_revolution"], r["seed"], r["status"]) for r in only["mapping"]] == [(20, 1, "ok"), (20, 2, "ok")]
+    with open(moved / "mapping.csv") as f:
+        summary = list(csv.DictReader(f))
+    assert len(summary) == 1 and "core_end_error_fr0.01" in summary[0] and float(summary[0]["btr_n"]) == 2
+    assert "## Mapping" in (moved / "report.md").read_text() and (moved / "mapping.png").exists()
     assert [(r["side"], r["seed"], r["status"]) for r in only["drum"]] == \
         [("btr", 1, "ok"), ("btr", 2, "not run"), ("liggghts", 1, "ok")], only["drum"]
     assert only["drum"][0]["core_end"] == res["drum"][0]["core_end"]

@@ -39,6 +39,10 @@ def _drum(dims, fills, froude, revolutions, dem_seeds):
             for d in dims for n, f in fills.items()]
 
 
+# The mapping part: dynamic BTR's steps per revolution and lift (a fraction of R) swept on the drum cases. The lift
+# changes only last bits (a grain falls vertically from any start above the pile), two values show it.
+MAPPING = {"steps": [10, 25, 50, 100, 200, 400], "lifts": [0.025, 0.1]}
+
 PLANS = {
     # What the issue asks for: 2D and 3D, 2 fills, 2 speeds in the rolling regime, 3 seeds; 3 revolutions in 2D,
     # 2 in 3D (its core index reaches 90 % of its final value within 0.6 revolution: docs/dynamic_vs_dem).
@@ -46,16 +50,16 @@ PLANS = {
              + _drum([3], {"low": 0.3, "high": 0.45}, [3e-3, 1e-2], 2.0, 3),
              "brazil": {"phis": [2.0, 3.0, 4.0, 6.0], "count": 1650, "size_d": 12.0, "taps": 10, "gamma": 2.0,
                         "dem_seeds": 3},
-             "cost_grains": 10000, "cost_revolutions": 0.05},
+             "cost_grains": 10000, "cost_revolutions": 0.05, "mapping": MAPPING},
     # What fits in about half an hour of two cores (measured: a 2D revolution 86 s at Fr 1e-2, 3D 274 s).
     "reduced": {"drum": _drum([2], {"high": 0.45}, [3e-3, 1e-2], 2.0, 3) + _drum([3], {"high": 0.45}, [1e-2], 1.0, 1),
                 "brazil": {"phis": [2.0, 3.0, 4.0, 6.0], "count": 1650, "size_d": 12.0, "taps": 5, "gamma": 2.0,
                            "dem_seeds": 2},
-                "cost_grains": 10000, "cost_revolutions": 0.02},
+                "cost_grains": 10000, "cost_revolutions": 0.02, "mapping": MAPPING},
     # For the tests: one 2D drum for a tenth of a revolution, one Phi, one tap.
     "tiny": {"drum": _drum([2], {"low": 0.3}, [1e-2], 0.1, 1),
              "brazil": {"phis": [3.0], "count": 80, "size_d": 5.0, "taps": 1, "gamma": 2.0, "dem_seeds": 1},
-             "cost_grains": 0, "cost_revolutions": 0.0},
+             "cost_grains": 0, "cost_revolutions": 0.0, "mapping": {"steps": [20], "lifts": [0.1]}},
 }
 
 
@@ -147,7 +151,7 @@ class Study:
         self.out, self.engine, self.plan, self.seeds, self.np = Path(outdir), engine, plan, seeds, np_
         self.progress, self.reuse, self.report_only = progress, reuse or report_only, report_only
         self.btr = find_btr()
-        self.drum_rows, self.brazil_rows, self.cost_rows = [], [], []
+        self.drum_rows, self.brazil_rows, self.cost_rows, self.mapping_rows = [], [], [], []
         self.series = {}  # run tag -> (x, y) for the figures
 
     def _run(self, argv, d: Path, label: str) -> dict:
@@ -246,6 +250,29 @@ class Study:
                 row["cpu_per_rev"] = (drum_summary(t, int(sc["drum"]["steps_per_revolution"]))["cpu_per_rev"]
                                       if side == "btr" else dem_cpu_per_rev(d))
 
+    def mapping_cases(self, rec):
+        """BTR alone over its own steps per revolution and lift, on every drum case, all seeds (dynamic_vs_dem_mapping)."""
+        m = self.plan["mapping"]
+        for p in self.plan["drum"]:
+            case = f"drum{p['dim']}d_{p['fill_name']}"
+            scene = drum_scene(p["dim"], p["fill"], 1)
+            for spr in m["steps"]:
+                for lift in m["lifts"]:
+                    for seed in self.seeds:
+                        row = {"case": case, "steps_per_revolution": spr, "lift_R": lift, "seed": seed}
+                        d = self.out / "runs" / "mapping" / case / f"n{spr}_lift{lift:g}_s{seed}"
+                        with rec.case(f"mapping {case} {spr} steps/rev lift {lift:g} R seed {seed}", self.mapping_rows,
+                                      row, on_row=lambda _: self.write()):
+                            sc = copy.deepcopy(scene)
+                            sc["scene"]["seed"] = seed
+                            sc["drum"].update(steps_per_revolution=spr, lift=lift * sc["container"]["radius"],
+                                              revolutions=p["revolutions"], snapshot_every=max(1, spr // 20))
+                            d.mkdir(parents=True, exist_ok=True)
+                            write_scene_toml(d / "scene.toml", sc)
+                            self._run([self.btr, "drum", str(d / "scene.toml"), "-o", str(d), "--quiet"], d,
+                                      "btr drum (mapping)")
+                            row.update(drum_summary(read_steps(d / "drum_steps.csv"), spr))
+
     # ---- Brazil nut
     def brazil_cases(self, rec):
         p = self.plan["brazil"]
@@ -281,9 +308,9 @@ def run_dynamic_vs_dem(outdir=None, engine: str = "liggghts", plan_name: str = "
                        parts=("drum", "brazil", "cost"), progress=print, reuse_runs: bool = False,
                        dims=(2, 3), report_only: bool = False) -> dict:
     """report_only: the drum cases' tables from the runs finished in outdir/runs (as --reuse-runs finds them),
-    the others rows "not run"; nothing is run."""
-    if report_only and tuple(parts) != ("drum",):
-        raise InputError(f"--report-only: only with --parts drum (got {','.join(parts)})")
+    the others rows "not run": no drum run is started (the mapping's BTR runs, seconds each, still run)."""
+    if report_only and not set(parts) <= {"drum", "mapping"}:
+        raise InputError(f"--report-only: only with --parts drum and mapping (got {','.join(parts)})")
     outdir = Path(outdir) if outdir else REPO / "out" / "dynamic_vs_dem"
     plan = copy.deepcopy(PLANS[plan_name])
     plan["drum"] = [p for p in plan["drum"] if p["dim"] in dims]
@@ -299,10 +326,13 @@ def run_dynamic_vs_dem(outdir=None, engine: str = "liggghts", plan_name: str = "
         study.brazil_cases(rec)
     if "cost" in parts:
         study.cost_case(rec)
+    if "mapping" in parts:
+        study.mapping_cases(rec)
     study.write()
-    rows = study.drum_rows + study.brazil_rows + study.cost_rows
+    rows = study.drum_rows + study.brazil_rows + study.cost_rows + study.mapping_rows
     failed = [r for r in rows if r["status"] != "ok"]
     rec.finish({"runs": len(rows), "failed": len(failed), "report": str(outdir / "report.md")})
     progress(f"dynamic-vs-dem: {len(rows)} runs ({len(failed)} failed); report {outdir / 'report.md'}")
-    return {"drum": study.drum_rows, "brazil": study.brazil_rows, "cost": study.cost_rows}
+    return {"drum": study.drum_rows, "brazil": study.brazil_rows, "cost": study.cost_rows,
+            "mapping": study.mapping_rows}
 

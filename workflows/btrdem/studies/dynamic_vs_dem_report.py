@@ -9,6 +9,7 @@ import numpy as np
 
 from ..core import report
 from ..core.io import atomic_write_text
+from . import dynamic_vs_dem_mapping as out_mapping
 
 DRUM_KEYS = ["case", "side", "froude", "seed", "dimension", "grains", "status", "reason", "revolutions",
              "segregation_end", "core_end", "core_t90_rev", "dynamic_angle_deg", "cpu_per_rev", "cpu_seconds"]
@@ -68,7 +69,9 @@ def write_outputs(study) -> None:
     atomic_write_text(out / "drum_vs_dem.csv", _csv(comp, ["case", "froude", "measure", "btr_mean", "btr_n",
                                                            "dem_mean", "dem_sd", "dem_n", "error_sd", "ratio"]))
     _figures(study)
-    atomic_write_text(out / "report.md", _report(study, comp))
+    text = _report(study, comp)
+    mapping = out_mapping.write_outputs(study)
+    atomic_write_text(out / "report.md", text + "\n" + "\n".join(out_mapping.report_section(mapping)))
 
 
 def _figures(study) -> None:
