@@ -1,4 +1,4 @@
-// `btr shake --engine liggghts` (shake_dem.h): BTR packing -> relaxation at rest (btr relax's machinery) ->
+// `btr shake --engine liggghts|yade` (shake_dem.h): BTR packing -> relaxation at rest (btr relax's machinery) ->
 // tapping (coupling/dem/tapping.h) -> the series of snapshots and NAME_cycles.csv with the columns of dynamic
 // BTR's run (shake_cycles.h), and shake_dem.json.
 #include "shake_dem.h"
