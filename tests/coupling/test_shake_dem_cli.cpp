@@ -274,6 +274,19 @@ TEST_F(ShakeDemCli, BadGammaOrFrequencyIsRefusedNamingTheField) {
   EXPECT_NE(r.err.find("--taps"), std::string::npos) << r.err;
 }
 
+TEST_F(ShakeDemCli, YadeRefusesACellNarrowerThanFourIntruderRadii) {
+  // The tiny nut's intruder has radius 1.5 mm: 4 radii are its 6 mm period, and YADE gives a pair one periodic image
+  // only in a wider cell. Refused before any engine runs: exit 2, naming the scene file and the field.
+  const std::string scene = scene_file("narrow", "");
+  const fs::path out = dir_ / "narrow_out";
+  const CliRun r = btr("shake " + scene + " -o " + out.string() + " --engine yade --taps 1");
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find(scene), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("container.size"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out / "shake_dem.json"));
+  EXPECT_FALSE(fs::exists(out / "relax" / "relax_yade.py"));
+}
+
 TEST_F(ShakeDemCli, AnEngineFailureIsExit5WithItsRecord) {
   if (!btr_test::have_engine("liggghts")) FAIL() << "liggghts is not installed";
   // Killed at a wall-time limit no relaxation can meet: exit 5, the failure record where the engine ran, and no
