@@ -1,7 +1,8 @@
 // `btr shake --engine liggghts|yade` as a user runs it: a tiny Brazil-nut scene (120 grains and an intruder in a
-// periodic cell) relaxed and tapped twice for real in LIGGGHTS, and a smaller one tapped once in YADE: the files of
-// dynamic BTR's run with the same columns, ids kept, the floor moved and the grains with it, nobody below the
-// floor, the record; and the refusals of bad [shaking] gamma / frequency (exit 2, naming the file and the field).
+// periodic cell) relaxed and tapped twice for real in LIGGGHTS, and smaller ones (periodic 3D, 2D box) tapped once
+// in YADE: the files of dynamic BTR's run with the same columns, ids kept, the floor moved and the grains with it,
+// nobody below the floor, the record; and the refusals of bad [shaking] gamma / frequency and of a YADE cell too
+// narrow (exit 2, naming the file and the field).
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -9,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <utility>
 #include <vector>
 
 #include "cli_run.h"
@@ -246,6 +248,35 @@ TEST_F(ShakeDemCli, TinyBrazilNutTappedOnceInYade) {
   EXPECT_GT(tap["rest_time"].get<double>(), 0.0);
   EXPECT_GT(tap["engine_cpu_seconds"].get<double>(), 0.0);
   EXPECT_TRUE(fs::exists(dem_out / "tap" / "yade_tap_1.csv"));
+}
+
+// YADE taps 2D disks in a box too: 20 disks and the intruder (ratio 2) between walls 6 mm apart, held in y = 0.
+TEST_F(ShakeDemCli, Tiny2dBoxTappedOnceInYade) {
+  if (!btr_test::have_engine("yade")) FAIL() << "yade is not installed";
+  std::string nut = std::string("[scene]\nname = \"box2d\"\ndimension = 2\nseed = 3\n") + kTinyNut +
+                    "gamma = 2.5\nfrequency = 40.0\n";
+  for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
+           {"count = 120", "count = 20"},
+           {"diameter_ratio = 3.0", "diameter_ratio = 2.0"},
+           {"max_time = 0.3", "max_time = 0.1"},
+           {"kind = \"periodic\"\nsize = [0.006, 0.006]", "kind = \"box\"\nsize = [0.006]"},
+           {"position = [0.0, 0.0]", "position = [0.0]"}}) {
+    const std::size_t at = nut.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    nut.replace(at, from.size(), to);
+  }
+  const fs::path scene = dir_ / "box2d.toml";
+  std::ofstream(scene) << nut;
+  const fs::path dem_out = dir_ / "box2d_dem";
+  const DemRun run =
+      run_both(scene.string(), "box2d", dir_ / "box2d_btr", dem_out, "--cycles 1", "yade", 1, "--rest-time 0.05");
+  ASSERT_EQ(run.rows.size(), 2u);
+  check_tapped(dir_ / "box2d_btr" / "box2d_c000000.csv", dem_out / "box2d_c000000.csv",
+               dem_out / "box2d_c000001.csv", 1.0e-3);
+  for (const Grain& g : read_packing((dem_out / "box2d_c000001.csv").string()).grains) EXPECT_EQ(g.x.y(), 0.0);
+  const nlohmann::json& tap = run.record["tapping"]["per_tap"][0];
+  const double amplitude = run.record["tapping"]["amplitude"].get<double>();
+  EXPECT_NEAR(tap["floor_measured"]["highest"].get<double>(), amplitude, 1e-3 * amplitude) << tap.dump();
 }
 
 TEST_F(ShakeDemCli, BadGammaOrFrequencyIsRefusedNamingTheField) {
