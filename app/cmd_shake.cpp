@@ -94,7 +94,7 @@ Runner add_shake_command(CLI::App& app) {
       "Writes OUTDIR/NAME_cNNNNNN.{csv,json,vtp} every snapshot_every cycles, OUTDIR/NAME.pvd (ParaView\n"
       "collection) and OUTDIR/NAME_cycles.csv (cycle, seconds, packing_fraction, bed_top_d, intruder_z_d,\n"
       "intruder_z_over_bed_top, intruder_below_top_d; lengths in bed-grain diameters d).\n"
-      "With --engine liggghts: the same BTR packing is relaxed at rest in the engine and then tapped: per tap the\n"
+      "With --engine liggghts|yade: the same BTR packing is relaxed at rest in the engine and then tapped: per tap the\n"
       "floor moves by z = A sin(2 pi f t) for one period ([shaking] gamma = A (2 pi f)^2 / g, frequency f), then the\n"
       "bed rests until its kinetic energy dies out; the same files, plus OUTDIR/shake_dem.json, OUTDIR/relax/ and\n"
       "OUTDIR/tap/ (the engine runs); seconds = the engine's processor time so far.\n"
@@ -108,15 +108,15 @@ Runner add_shake_command(CLI::App& app) {
   cmd->add_flag("--check", o->check, "self-check every snapshot; exit code 4 if any fails (files are still written)");
   cmd->add_flag("-q,--quiet", o->quiet, "no progress bar and no summary; only errors");
   cmd->add_option("--name", o->name, "base name of the output files (default: the scene name)");
-  cmd->add_option("--engine", o->engine, "liggghts: DEM tapping instead of dynamic BTR (default: dynamic BTR)")
-      ->check(CLI::IsMember({"liggghts"}));
+  cmd->add_option("--engine", o->engine, "liggghts | yade: DEM tapping instead of dynamic BTR (default: dynamic BTR)")
+      ->check(CLI::IsMember({"liggghts", "yade"}));
   cmd->add_option("--taps", o->taps, "--engine: number of taps (default: [shaking].cycles)")->check(positive_integer());
   cmd->add_option("--rest-time", o->rest_time,
                   "--engine: longest rest after a tap [simulated s]; a rest ends sooner once the kinetic energy is "
                   "below the relaxation's threshold at two checks in a row")
       ->capture_default_str()
       ->check(positive_number());
-  cmd->add_option("--np", o->np, "--engine: MPI ranks (mpirun -np N)")->check(positive_integer());
+  cmd->add_option("--np", o->np, "--engine: LIGGGHTS MPI ranks (mpirun -np N), YADE threads")->check(positive_integer());
   cmd->add_option("--time-limit", o->time_limit, "--engine: wall-time limit of each engine run [s]")
       ->capture_default_str()
       ->check(positive_number());

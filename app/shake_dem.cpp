@@ -1,4 +1,4 @@
-// `btr shake --engine liggghts` (shake_dem.h): BTR packing -> relaxation at rest (btr relax's machinery) ->
+// `btr shake --engine liggghts|yade` (shake_dem.h): BTR packing -> relaxation at rest (btr relax's machinery) ->
 // tapping (coupling/dem/tapping.h) -> the series of snapshots and NAME_cycles.csv with the columns of dynamic
 // BTR's run (shake_cycles.h), and shake_dem.json.
 #include "shake_dem.h"
@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <stdexcept>
 
 #include "btr/placement/run_scene.h"
 #include "btr/scene/scene_toml.h"
@@ -53,7 +54,14 @@ int run_shake_dem(const ShakeOptions& o, const CLI::App& cmd, const btr::Scene& 
   fs::create_directories(out);
   std::cout << "shake --engine " << o.engine << ": " << start.grains.size() << " grains; relaxing the BTR packing at "
             << "rest in " << (out / "relax").string() << "\n";
-  const btr::RelaxResult relaxed = btr::relax(start, scene, o.engine, rs, (out / "relax").string());
+  btr::RelaxResult relaxed;
+  try {
+    relaxed = btr::relax(start, scene, o.engine, rs, (out / "relax").string());
+  } catch (const std::invalid_argument& e) {
+    // An engine's writer refusing the scene before anything runs (e.g. YADE's periodic cell narrower than 4 largest
+    // radii, container.size): bad input, exit 2.
+    throw btr::RelaxRefused(e.what());
+  }
   const btr::RelaxPlan plan = btr::make_tap_plan(relaxed.relaxed, scene, ts, o.engine);
   const auto adapter = btr::make_adapter(o.engine);
   const btr::TapResult tapped =

@@ -1,5 +1,5 @@
 #pragma once
-// `btr shake --engine liggghts`: the DEM counterpart of dynamic BTR by shaking (docs/guide/shake_dem.md).
+// `btr shake --engine liggghts|yade`: the DEM counterpart of dynamic BTR by shaking (docs/guide/shake_dem.md).
 #include <cstdint>
 #include <string>
 

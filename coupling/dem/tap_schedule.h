@@ -1,6 +1,7 @@
 #pragma once
 // The DEM tapping of `btr shake --engine` (tapping.h), as the engines' writers need it: a plain schedule, part of
 // RelaxPlan (engine_adapter.h), and what an engine gives back after each tap.
+#include <limits>
 #include <vector>
 
 #include "btr/model/grain.h"
@@ -35,6 +36,12 @@ struct TapSnapshot {
   double rested_kinetic = 0.0; // J
   bool settled = false;        // the kinetic rule held (else the rest hit max_rest_checks)
   long step = 0;               // the run's time step count at the end of the rest
+  // The floor's motion during the tap as the engine's script measured it on the floor body at every step (YADE;
+  // NaN where an engine does not measure it): highest and lowest displacement from its rest height [m], largest
+  // speed [m/s], and the displacement left when the period ended (round-off, then removed) [m].
+  static constexpr double kNotMeasured = std::numeric_limits<double>::quiet_NaN();
+  double floor_highest = kNotMeasured, floor_lowest = kNotMeasured, floor_peak_speed = kNotMeasured,
+         floor_end = kNotMeasured;
 };
 
 }  // namespace btr

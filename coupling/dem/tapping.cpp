@@ -121,7 +121,7 @@ TapResult run_tapping(const Packing& start, const Scene& scene, const EngineAdap
     const double share = static_cast<double>(t.step) / total_steps;
     const double share_tap = static_cast<double>(t.step - previous_step) / total_steps;
     out.cpu_seconds.push_back(out.run.cpu_seconds * share);
-    rows.push_back({{"tap", t.tap},
+    nlohmann::json row = {{"tap", t.tap},
                     {"moved_time", t.moved_time},
                     {"moved_kinetic_energy", t.moved_kinetic},
                     {"rested_time", t.rested_time},
@@ -131,7 +131,13 @@ TapResult run_tapping(const Packing& start, const Scene& scene, const EngineAdap
                     {"steps", t.step - previous_step},
                     {"simulated_time", t.rested_time - previous_time},
                     {"engine_cpu_seconds", out.run.cpu_seconds * share_tap},
-                    {"engine_wall_seconds", out.run.wall_seconds * share_tap}});
+                    {"engine_wall_seconds", out.run.wall_seconds * share_tap}};
+    if (std::isfinite(t.floor_highest))  // measured by the engine's script on the floor body (YADE)
+      row["floor_measured"] = {{"highest", t.floor_highest},
+                               {"lowest", t.floor_lowest},
+                               {"peak_speed", t.floor_peak_speed},
+                               {"end", t.floor_end}};
+    rows.push_back(row);
     previous_step = t.step;
     previous_time = t.rested_time;
   }

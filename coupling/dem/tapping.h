@@ -20,7 +20,7 @@ inline constexpr double kDefaultTapRestTime = 0.5;
 struct TapSettings {
   long taps = 1;
   double max_rest_time = kDefaultTapRestTime;  // s
-  int np = 1;                       // LIGGGHTS: MPI ranks
+  int np = 1;                       // LIGGGHTS: MPI ranks; YADE: threads
   double wall_time_limit = 3600.0;  // s; the engine run is killed past this
 };
 

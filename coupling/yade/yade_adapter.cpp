@@ -49,7 +49,8 @@ class YadeAdapter : public EngineAdapter {
     const std::string script = yade_script(packing, scene, plan);  // validates before anything is written
     const fs::path d(dir);
     // Outputs of an earlier run in the same folder must not be read as this run's.
-    for (const char* name : {yade_files::kStatus, yade_files::kFinal, yade_files::kKinetic, yade_files::kContacts})
+    for (const char* name : {yade_files::kStatus, yade_files::kFinal, yade_files::kKinetic, yade_files::kContacts,
+                             yade_files::kTaps})
       fs::remove(d / name);
     write_text_file((d / yade_files::kPacking).string(), packing_csv(packing, scene));
     write_text_file((d / yade_files::kScript).string(), script);
@@ -83,6 +84,11 @@ class YadeAdapter : public EngineAdapter {
   // The script exits with status 1 after writing a "failed" status with its failure_kind.
   Grains read_snapshot(const std::string& dir, std::size_t k, const Packing& original) const override {
     return yade_read_snapshot(dir, k, original);
+  }
+
+  std::vector<TapSnapshot> read_taps(const std::string& dir, const Packing& original,
+                                     const RelaxPlan& plan) const override {
+    return yade_read_taps(dir, original, plan);
   }
 
   std::optional<EngineFailure> failure_after_exit(const std::string& dir, const Packing& original, const Scene& scene,

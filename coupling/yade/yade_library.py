@@ -17,6 +17,7 @@ STATUS_FILE = "yade_status.json"
 FINAL_FILE = "yade_final.csv"
 KINETIC_FILE = "yade_kinetic.csv"
 CONTACTS_FILE = "yade_contacts.csv"
+TAPS_FILE = "yade_taps.json"  # tapping (TAP): one record per tap, rewritten after each
 LOG_FILE = "yade.log"
 
 
@@ -57,7 +58,7 @@ def write_atomically(name, text):
 
 
 # Stale outputs of an earlier run must never be mistaken for this run's.
-for _name in (STATUS_FILE, FINAL_FILE, KINETIC_FILE, CONTACTS_FILE):
+for _name in (STATUS_FILE, FINAL_FILE, KINETIC_FILE, CONTACTS_FILE, TAPS_FILE):
     if os.path.exists(path(_name)):
         os.remove(path(_name))
 
@@ -82,6 +83,7 @@ _species = {}        # species -> material id
 _pairs = []          # (material id, material id, restitution, friction)
 _grains = []         # [(packing id, body id)] in packing order
 _walls = []          # body ids of walls, facets and the periodic floor
+_floor = None        # body id of the floor (the plane wall or periodic floor box at z = 0), which TAP moves
 _clumps = []         # body ids of the clumps (rigid clusters), one per cluster of the packing
 _cell = None         # (Lx, Ly, Lz) when periodic
 _rolling = None      # dict(krot=, eta=) for the Hertz-Mindlin moment law; None = no rolling term
@@ -190,6 +192,9 @@ def add_plane(axis, position):
     else:
         b = utils.wall(position, axis=axis, material=_materials["walls"])
     _walls.append(O.bodies.append(b))
+    if axis == 2:
+        global _floor
+        _floor = _walls[-1]
 
 
 def add_cylinder(radius, height, segments):
@@ -663,6 +668,145 @@ def rotate(rotation):
     return "max-time"
 
 
+def grain_kinetic_energy():
+    """Translational kinetic energy of the grains alone. O.energy["kinTrans"] also counts every body the engines
+    move, and the moving floor (in a periodic cell a box far wider than the cell, of a large mass) would swamp it."""
+    total = 0.0
+    for _, b in present_grains():
+        total += 0.5 * b.state.mass * b.state.vel.squaredNorm()
+    return total
+
+
+class TapWatch:
+    """Inside YADE's loop while tapping (PyRunners; never raises, it records the failure and pauses YADE):
+    sample() bounds the grains' kinetic energy every AVERAGE_EVERY steps (NaN or above KINETIC_BOUND is a failure);
+    follow() runs at every step of a tap, after NewtonIntegrator, and keeps the floor's highest and lowest
+    displacement from its rest height and its largest speed: the motion the script reports, measured on the floor
+    body itself."""
+
+    def __init__(self, floor, rest_z):
+        self.floor, self.rest_z = floor, rest_z
+        self.failure = None
+        self.reset()
+
+    def reset(self):
+        self.highest, self.lowest, self.speed, self.steps = -float("inf"), float("inf"), 0.0, 0
+
+    def sample(self):
+        try:
+            e = grain_kinetic_energy()
+            t, step = O.time + O.dt, O.iter + 1
+            if not math.isfinite(e) or e > KINETIC_BOUND:
+                _history.append((t, e))
+                if not math.isfinite(e):
+                    raise RunFailure("kinetic energy is %r at t = %.6g s (step %d)" % (e, t, step), "non_finite")
+                raise RunFailure("blow-up: kinetic energy %.6g J above the bound %.6g J at t = %.6g s (step %d)" % (
+                    e, KINETIC_BOUND, t, step), "blow_up")
+        except Exception as exc:
+            self.failure = exc if isinstance(exc, RunFailure) else RunFailure("%s: %s" % (type(exc).__name__, exc))
+            O.pause()
+
+    def follow(self):
+        s = O.bodies[self.floor].state
+        dz = s.pos[2] - self.rest_z
+        self.highest, self.lowest = max(self.highest, dz), min(self.lowest, dz)
+        self.speed = max(self.speed, s.vel.norm())
+        self.steps += 1
+
+
+def tap(spec):
+    """DEM tapping (TAP; the LIGGGHTS script's loop, tap for tap): per tap the floor body moves by
+    z(t) = amplitude sin(2 pi frequency (t - t0)) for one period (steps_per_tap steps), then stands still while the
+    bed rests: one check window, then up to max_rest_checks windows until the grains' kinetic energy is below
+    KINETIC_THRESHOLD at the ends of two windows in a row. After each rest the grains' positions go to
+    yade_tap_K.csv and the tap's record to yade_taps.json. Returns "taps".
+    The floor is moved by YADE's HarmonicMotionEngine, which sets the floor's velocity at each step before
+    NewtonIntegrator moves it by velocity x dt: v = -A omega sin(omega t + fi), t YADE's absolute time. With
+    A = amplitude sin(theta / 2) / (theta / 2) and fi = theta / 2 - pi / 2 - omega t0 (theta = omega dt), the
+    velocity of step n is exactly (z(t_n+1) - z(t_n)) / dt, so the floor is at z(t_n) after every step n and back at
+    its rest height after the period (to round-off, which is then removed): it starts from rest at z = 0 with the
+    speed of the sine's first step, as LIGGGHTS' wiggle. Between taps the engine is dead and the floor's velocity
+    zero."""
+    global _loop_seconds
+    import __main__
+    from yade.wrapper import HarmonicMotionEngine
+    if _floor is None:
+        raise RunFailure("tapping: the scene has no floor to move")
+    floor = O.bodies[_floor]
+    rest = Vector3(floor.state.pos)
+    amplitude, frequency = spec["amplitude"], spec["frequency"]
+    omega = 2.0 * math.pi * frequency
+    theta = omega * O.dt
+    motion = HarmonicMotionEngine(ids=[_floor], A=Vector3(0.0, 0.0, amplitude * math.sin(0.5 * theta) / (0.5 * theta)),
+                                  f=Vector3(0.0, 0.0, frequency), fi=Vector3(0.0, 0.0, 0.0), dead=True, label="tap_floor")
+    watch = TapWatch(_floor, rest[2])
+    __main__._btr_tap_watch = watch
+    follow = PyRunner(command="_btr_tap_watch.follow()", iterPeriod=1, nDone=1, dead=True, label="tap_follow")
+    newton = next(i for i, e in enumerate(O.engines) if isinstance(e, NewtonIntegrator))
+    O.engines = O.engines[:newton] + [motion] + O.engines[newton:] + [
+        PyRunner(command="_btr_tap_watch.sample()", iterPeriod=AVERAGE_EVERY, iterLast=O.iter - 1, nDone=1,
+                 label="tap_guard"), follow]
+    log("tapping: %d taps of the floor (body %d), amplitude %.6g m at %.6g Hz, %d steps per tap; rest windows of %d "
+        "steps, at most %d after the first" % (spec["taps"], _floor, amplitude, frequency, spec["steps_per_tap"],
+                                               spec["steps_per_check"], spec["max_rest_checks"]))
+
+    def run(steps):
+        O.run(steps, True)
+        if watch.failure is not None:
+            raise watch.failure
+        e = grain_kinetic_energy()
+        _history.append((O.time, e))
+        if not math.isfinite(e):
+            raise RunFailure("kinetic energy is %r at t = %.6g s" % (e, O.time), "non_finite")
+        if e > KINETIC_BOUND:
+            raise RunFailure("blow-up: kinetic energy %.6g J above the bound %.6g J at t = %.6g s" % (
+                e, KINETIC_BOUND, O.time), "blow_up")
+        return e
+
+    records = []
+    t_loop = time.time()
+    for k in range(1, spec["taps"] + 1):
+        t0 = O.time
+        motion.fi = Vector3(0.0, 0.0, 0.5 * theta - 0.5 * math.pi - omega * t0)
+        watch.reset()
+        follow.iterLast = O.iter - 1  # follow from this step on (a PeriodicEngine runs once iter - iterLast >= 1)
+        motion.dead = follow.dead = False
+        moved_kinetic = run(spec["steps_per_tap"])
+        motion.dead = follow.dead = True
+        floor.state.vel = Vector3(0.0, 0.0, 0.0)
+        floor.state.angVel = Vector3(0.0, 0.0, 0.0)
+        end = floor.state.pos[2] - rest[2]
+        if watch.steps != spec["steps_per_tap"] or not abs(end) <= 1e-9 * amplitude:
+            raise RunFailure("tap %d: the floor ended %.6g m from its rest height after %d steps of %d" % (
+                k, end, watch.steps, spec["steps_per_tap"]), "engine_error")
+        floor.state.pos = rest
+        moved_time = O.time
+        previous = run(spec["steps_per_check"])
+        e, settled = previous, False
+        for _ in range(spec["max_rest_checks"]):
+            e = run(spec["steps_per_check"])
+            if previous < KINETIC_THRESHOLD and e < KINETIC_THRESHOLD:
+                settled = True
+                break
+            previous = e
+        lines = ["id,x,y,z"]
+        for gid, bid in _grains:
+            p = O.bodies[bid].state.pos
+            lines.append("%d,%.17g,%.17g,%.17g" % (gid, p[0], p[1], p[2]))
+        write_atomically("yade_tap_%d.csv" % k, "\n".join(lines) + "\n")
+        records.append({"tap": k, "moved_time": moved_time, "moved_kinetic": moved_kinetic, "rested_time": O.time,
+                        "rested_kinetic": e, "settled": settled, "step": O.iter,
+                        "floor_highest": watch.highest, "floor_lowest": watch.lowest,
+                        "floor_peak_speed": watch.speed, "floor_end": end, "process_seconds": time.process_time()})
+        write_atomically(TAPS_FILE, json.dumps(records, indent=1) + "\n")
+        log("BTR-TAP %d %s: floor %.6g..%.6g m (peak speed %.6g m/s, %.3g m off at the end), kinetic %.6g J when it "
+            "stopped, %.6g J at t = %.6g s, step %d" % (k, "settled" if settled else "max-rest", watch.lowest,
+                                                        watch.highest, watch.speed, end, moved_kinetic, e, O.time,
+                                                        O.iter))
+    _loop_seconds = time.time() - t_loop
+    return "taps"
+
+
 def relax():
     """Runs the relaxation in one O.run() call (the StopRule's PyRunner pauses it) and returns the stop
     reason; the wall time of the loop alone is in _loop_seconds."""
@@ -685,6 +829,8 @@ def relax():
     _history.append((0.0, sum(0.5 * O.bodies[b].state.mass * O.bodies[b].state.vel.squaredNorm() for _, b in _grains)))
     if globals().get("ROTATION"):
         return rotate(ROTATION)
+    if globals().get("TAP"):
+        return tap(TAP)
     _rule = StopRule()
     # PyRunner commands run in __main__, which is not this script's namespace under the `yade` launcher.
     import __main__

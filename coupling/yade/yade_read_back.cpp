@@ -149,7 +149,9 @@ RelaxResult yade_read_back(const std::string& dir, const Packing& original, cons
   const std::string status = st.value("status", "");
   if (status != "ok") throw yade_status_failure(dir, st, original, scene);
   const std::string reason = st.value("stop_reason", "");
-  if (reason != "max-time" && reason != plan.stop_rule)
+  if (plan.tap.enabled && reason != "taps")  // tapping ends after its last tap (yade_library.py tap())
+    in.fail("stop reason \"" + reason + "\" in " + yade_files::kStatus + " is not \"taps\" (a tapping run)");
+  if (!plan.tap.enabled && reason != "max-time" && reason != plan.stop_rule)
     in.fail("stop reason \"" + reason + "\" in " + yade_files::kStatus + " is neither the scene's rule \"" + plan.stop_rule +
             "\" nor max-time");
 
@@ -264,9 +266,12 @@ RelaxResult yade_read_back(const std::string& dir, const Packing& original, cons
 
 std::string yade_snapshot_file(std::size_t k) { return "yade_rot_" + std::to_string(k) + ".csv"; }
 
-Grains yade_read_snapshot(const std::string& dir, std::size_t k, const Packing& original) {
-  const Reader in(dir);
-  const std::string name = yade_snapshot_file(k);
+std::string yade_tap_file(long k) { return "yade_tap_" + std::to_string(k) + ".csv"; }
+
+namespace {
+
+// original's grains at the positions of dir/name (id,x,y,z, one row per grain, any order).
+Grains read_positions(const Reader& in, const std::string& name, const Packing& original) {
   const auto rows = in.csv(name.c_str(), "id,x,y,z");
   const std::size_t n = original.grains.size();
   if (rows.size() != n)
@@ -283,6 +288,53 @@ Grains yade_read_snapshot(const std::string& dir, std::size_t k, const Packing& 
     out[i].x = Vec3(r[1], r[2], r[3]);
   }
   return out;
+}
+
+}  // namespace
+
+Grains yade_read_snapshot(const std::string& dir, std::size_t k, const Packing& original) {
+  return read_positions(Reader(dir), yade_snapshot_file(k), original);
+}
+
+std::vector<TapSnapshot> yade_read_taps(const std::string& dir, const Packing& original, const RelaxPlan& plan) {
+  const Reader in(dir);
+  const fs::path p = fs::path(dir) / yade_files::kTaps;
+  std::ifstream f(p);
+  if (!f) in.fail("missing output " + p.string() + ": no tap ended");
+  const nlohmann::json records = nlohmann::json::parse(f, nullptr, false);
+  if (!records.is_array()) in.fail(p.string() + " is not a JSON array of tap records");
+  if (static_cast<long>(records.size()) != plan.tap.taps)
+    in.fail(p.string() + " has " + std::to_string(records.size()) + " tap records, expected " +
+            std::to_string(plan.tap.taps));
+  std::vector<TapSnapshot> taps;
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    const nlohmann::json& r = records[i];
+    const std::string where = p.string() + " record " + std::to_string(i + 1);
+    auto number = [&](const char* key) {
+      if (!r.is_object() || !r.contains(key) || !r[key].is_number())
+        in.fail(where + ": missing or non-numeric \"" + key + "\"");
+      const double v = r[key].get<double>();
+      if (!std::isfinite(v)) in.fail(where + ": non-finite \"" + key + "\"", FailureKind::NonFinite);
+      return v;
+    };
+    TapSnapshot t;
+    t.tap = static_cast<long>(number("tap"));
+    if (t.tap != static_cast<long>(i) + 1) in.fail(where + ": tap " + std::to_string(t.tap) + ", expected " + std::to_string(i + 1));
+    t.moved_time = number("moved_time");
+    t.moved_kinetic = number("moved_kinetic");
+    t.rested_time = number("rested_time");
+    t.rested_kinetic = number("rested_kinetic");
+    t.step = static_cast<long>(number("step"));
+    if (!r.contains("settled") || !r["settled"].is_boolean()) in.fail(where + ": missing \"settled\"");
+    t.settled = r["settled"].get<bool>();
+    t.floor_highest = number("floor_highest");
+    t.floor_lowest = number("floor_lowest");
+    t.floor_peak_speed = number("floor_peak_speed");
+    t.floor_end = number("floor_end");
+    t.grains = read_positions(in, yade_tap_file(t.tap), original);
+    taps.push_back(std::move(t));
+  }
+  return taps;
 }
 
 }  // namespace btr

@@ -204,6 +204,19 @@ std::string rotation_constant(const RelaxPlan& plan) {
          "    omega=" + num(r.omega) + ", axis_z=" + num(r.axis_z) + ", snapshot_steps=[" + steps + "])\n";
 }
 
+// TAP: None, or the plan's tapping (TapSchedule, tap_schedule.h); yade_library.py's tap() runs it instead of the
+// stop rule.
+std::string tap_constant(const RelaxPlan& plan) {
+  const TapSchedule& t = plan.tap;
+  if (!t.enabled) return "TAP = None  # not tapped\n";
+  return "TAP = dict(  # btr shake --engine yade: per tap the floor moves by z = amplitude sin(2 pi frequency t) for one\n"
+         "    # period (steps_per_tap steps of TIMESTEP), then the bed rests (windows of steps_per_check steps)\n"
+         "    taps=" + std::to_string(t.taps) + ", amplitude=" + num(t.amplitude) + ", frequency=" + num(t.frequency) +
+         ", gamma=" + num(t.gamma) + ",\n    steps_per_tap=" + std::to_string(t.steps_per_tap) +
+         ", steps_per_check=" + std::to_string(t.steps_per_check) + ", max_rest_checks=" +
+         std::to_string(t.max_rest_checks) + ")\n";
+}
+
 const char* kHeader = R"(#
 # Run it in one of two ways (every file is read from and written to this script's folder):
 #   PYTHONPATH=/usr/lib/x86_64-linux-gnu/yade-double/py OMP_NUM_THREADS=1 /usr/bin/python3 relax_yade.py
@@ -235,6 +248,8 @@ const char* kHeader = R"(#
 # A reference pour (POUR, `btr pour`): every grain starts held on a lattice (all degrees of freedom blocked);
 # batches of ids are moved down to a small drop height above the pile and freed one after the other, then the
 # stop rule runs (ARMING_TIME lies after the release; MAX_CHECKS counts from its end).
+# Tapping (TAP, `btr shake --engine yade`) replaces the stop rule: a HarmonicMotionEngine moves the floor body by
+# one period of a sine per tap, then the bed rests; yade_tap_K.csv (id,x,y,z) and yade_taps.json after each tap.
 # The rule runs inside YADE's loop (a PyRunner every AVERAGE_EVERY steps), which pauses YADE when it decides.
 # A run fails on NaN, E above KINETIC_BOUND (checked at every sample), lost bodies, or a grain below the floor.
 # Periodic cells: YADE gives a pair one periodic image, chosen by the collider, and only while each grain's
@@ -292,7 +307,9 @@ std::string yade_script(const Packing& packing, const Scene& scene, const RelaxP
 
   std::ostringstream out;
   out << "#!/usr/bin/python3\n"
-      << (plan.pour.enabled ? "# YADE reference pour of the grains of scene " : "# YADE relaxation of the packing of scene ") << py_string(scene.name) << " (" << py_string(scene.file)
+      << (plan.pour.enabled  ? "# YADE reference pour of the grains of scene "
+          : plan.tap.enabled ? "# YADE tapping of the packing of scene "
+                             : "# YADE relaxation of the packing of scene ") << py_string(scene.name) << " (" << py_string(scene.file)
       << "), written by btr " << BTR_VERSION << " (coupling/yade/yade_script.cpp).\n"
       << kHeader << yade_script_library();
   out << "\n\n# " << std::string(100, '-') << "\n# The scene (generated)\n"
@@ -318,7 +335,7 @@ std::string yade_script(const Packing& packing, const Scene& scene, const RelaxP
                                 ", " + num(plan.region_hi[1]) + ")  # open floor: x0, x1, y0, y1 [m]; grains leaving it are removed"
                           : std::string("None  # no removal region (not an open floor)"))
       << "\n"
-      << compaction_constant(plan, packing.grains, sched) << pour_constant(plan) << rotation_constant(plan)
+      << compaction_constant(plan, packing.grains, sched) << pour_constant(plan) << rotation_constant(plan) << tap_constant(plan)
       << "VERLET_DIST = " << num(verlet) << "  # m, collider's bounding-box margin: "
       << (verlet < 0.5 * st.r_min ? "below half the period with the largest grain" : "0.5 r_min") << "\n\n\n"
       << "def scene():\n";

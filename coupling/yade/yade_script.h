@@ -19,6 +19,7 @@ constexpr const char* kFinal = "yade_final.csv";      // id,x,y,z,vx,vy,vz
 constexpr const char* kKinetic = "yade_kinetic.csv";  // time,kinetic_energy
 constexpr const char* kContacts = "yade_contacts.csv";  // i,j,fn,overlap (j = 0 for a wall)
 constexpr const char* kLog = "yade.log";
+constexpr const char* kTaps = "yade_taps.json";     // tapping: one record per tap (yade_library.py tap())
 }  // namespace yade_files
 
 // A rotating drum's snapshot k (1-based, DrumRotation): "yade_rot_K.csv" (id,x,y,z).
@@ -26,6 +27,14 @@ std::string yade_snapshot_file(std::size_t k);
 
 // Reads snapshot k of a rotating drum's run in dir (EngineAdapter::read_snapshot).
 Grains yade_read_snapshot(const std::string& dir, std::size_t k, const Packing& original);
+
+// Tapping (RelaxPlan::tap): tap k's grains (1-based) after its rest, "yade_tap_K.csv" (id,x,y,z).
+std::string yade_tap_file(long k);
+
+// The taps of a tapping run in dir (EngineAdapter::read_taps): yade_taps.json's records (times, kinetic energies,
+// settled, step, the floor's measured motion) and each tap's grains. Throws EngineFailure for a missing or bad record
+// or file, lost or repeated ids.
+std::vector<TapSnapshot> yade_read_taps(const std::string& dir, const Packing& original, const RelaxPlan& plan);
 
 // Where Debian installs the `yade` Python module (package yade, double precision build).
 constexpr const char* kYadePythonPath = "/usr/lib/x86_64-linux-gnu/yade-double/py";

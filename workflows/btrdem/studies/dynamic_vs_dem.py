@@ -277,7 +277,7 @@ class Study:
     def brazil_cases(self, rec):
         p = self.plan["brazil"]
         for phi in p["phis"]:
-            for side in ("btr", self.engine if self.engine == "liggghts" else "liggghts"):
+            for side in ("btr", self.engine):
                 for seed in self.seeds[:p["dem_seeds"] if side != "btr" else 1]:
                     self.brazil_run(rec, phi, side, seed, p)
 
