@@ -37,6 +37,31 @@ MeshIndex::MeshIndex(const TriangleMesh& mesh, double cell) : mesh_(mesh) {
       for (long i = ix(box_lo_[t].x()); i <= ix(box_hi_[t].x()); ++i)
         columns_[static_cast<std::size_t>(i + nx_ * j)].push_back(static_cast<int>(t));
   stamp_.assign(n, 0u);
+  nz_ = std::max(1L, static_cast<long>(std::ceil((mesh.hi.z() - mesh.lo.z()) / w_)));
+  cap_ = 4.0 * w_;
+  if (static_cast<double>(nx_) * static_cast<double>(ny_) * static_cast<double>(nz_) <= 1 << 24)
+    field_.assign(static_cast<std::size_t>(nx_ * ny_ * nz_), std::numeric_limits<float>::quiet_NaN());
+}
+
+double MeshIndex::clearance(const Vec3& x) const {
+  const Vec3 outside = (mesh_.lo - x).cwiseMax(x - mesh_.hi).cwiseMax(0.0);
+  if (outside.squaredNorm() > 0.0) return outside.norm();
+  if (field_.empty()) return 0.0;
+  const long i = ix(x.x()), j = iy(x.y());
+  const long k = std::clamp(static_cast<long>(std::floor((x.z() - mesh_.lo.z()) / w_)), 0L, nz_ - 1);
+  const Vec3 centre(x0_ + (static_cast<double>(i) + 0.5) * w_, y0_ + (static_cast<double>(j) + 0.5) * w_,
+                    mesh_.lo.z() + (static_cast<double>(k) + 0.5) * w_);
+  float& cell = field_[static_cast<std::size_t>(i + nx_ * (j + ny_ * k))];
+  if (std::isnan(cell)) {
+    std::vector<int> near;
+    collect(centre - Vec3::Constant(cap_), centre + Vec3::Constant(cap_), near);
+    double d = cap_;
+    for (int t : near) d = std::min(d, distance(t, centre));
+    float f = static_cast<float>(d);
+    if (static_cast<double>(f) > d) f = std::nextafter(f, 0.0f);
+    cell = f;
+  }
+  return std::max(0.0, static_cast<double>(cell) - (x - centre).norm());
 }
 
 long MeshIndex::ix(double x) const { return std::clamp(static_cast<long>(std::floor((x - x0_) / w_)), 0L, nx_ - 1); }
@@ -87,12 +112,22 @@ void MeshIndex::collect(const Vec3& lo, const Vec3& hi, std::vector<int>& out) c
   std::sort(out.begin() + static_cast<long>(first), out.end());
 }
 
-double MeshIndex::fall_contact(int t, const Vec3& x, double r) const {
+double MeshIndex::fall_contact(int t, const Vec3& x, double r, double z_floor) const {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const Vec3& bl = box_lo_[static_cast<std::size_t>(t)];
   const Vec3& bh = box_hi_[static_cast<std::size_t>(t)];
   if (x.x() < bl.x() - r || x.x() > bh.x() + r || x.y() < bl.y() - r || x.y() > bh.y() + r) return nan;
   if (bl.z() - r > x.z()) return nan;
+  if (std::isfinite(z_floor)) {
+    // Within r of the triangle is within r of its plane: at most r / |n_z| above where the line crosses it.
+    const auto& f = mesh_.triangles[static_cast<std::size_t>(t)];
+    const Vec3& a = mesh_.vertices[f[0]];
+    const Vec3 n = (mesh_.vertices[f[1]] - a).cross(mesh_.vertices[f[2]] - a).normalized();
+    if (std::abs(n.z()) > 1e-3) {
+      const double z_plane = a.z() - (n.x() * (x.x() - a.x()) + n.y() * (x.y() - a.y())) / n.z();
+      if (z_plane + r / std::abs(n.z()) + 1e-9 * r < z_floor) return nan;
+    }
+  }
   // The distance along the line is convex in z: its minimum by golden section on [z_lo, z0], then the
   // highest height at distance r above the minimum by bisection.
   auto f = [&](double z) { return distance(t, Vec3(x.x(), x.y(), z)); };
