@@ -32,10 +32,35 @@ MeshIndex::MeshIndex(const TriangleMesh& mesh, double cell) : mesh_(mesh) {
   nx_ = std::max(1L, static_cast<long>(std::ceil(lx / w_)));
   ny_ = std::max(1L, static_cast<long>(std::ceil(ly / w_)));
   columns_.resize(static_cast<std::size_t>(nx_ * ny_));
-  for (std::size_t t = 0; t < n; ++t)
+  // A column holds the triangles whose shadow on the x-y plane meets it (a slanted triangle's bounding box
+  // covers far more columns than the triangle does), by separating axes: the column's sides, and the
+  // normals of the shadow's sides, with a margin far above round-off.
+  for (std::size_t t = 0; t < n; ++t) {
+    const auto& f = mesh.triangles[t];
+    const double eps = 1e-9 * w_;
+    auto meets = [&](long i, long j) {
+      const double cx0 = x0_ + static_cast<double>(i) * w_ - eps, cx1 = x0_ + static_cast<double>(i + 1) * w_ + eps;
+      const double cy0 = y0_ + static_cast<double>(j) * w_ - eps, cy1 = y0_ + static_cast<double>(j + 1) * w_ + eps;
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 &a = V[f[k]], &b = V[f[(k + 1) % 3]];
+        const double nx = b.y() - a.y(), ny = a.x() - b.x();
+        if (nx == 0.0 && ny == 0.0) continue;
+        double tmin = std::numeric_limits<double>::infinity(), tmax = -tmin;
+        for (int m = 0; m < 3; ++m) {
+          const double p = nx * V[f[m]].x() + ny * V[f[m]].y();
+          tmin = std::min(tmin, p), tmax = std::max(tmax, p);
+        }
+        const double c[4] = {nx * cx0 + ny * cy0, nx * cx1 + ny * cy0, nx * cx0 + ny * cy1, nx * cx1 + ny * cy1};
+        const double cmin = std::min({c[0], c[1], c[2], c[3]}), cmax = std::max({c[0], c[1], c[2], c[3]});
+        const double slack = 1e-9 * (std::abs(tmin) + std::abs(tmax) + std::abs(cmin) + std::abs(cmax));
+        if (cmax < tmin - slack || cmin > tmax + slack) return false;
+      }
+      return true;
+    };
     for (long j = iy(box_lo_[t].y()); j <= iy(box_hi_[t].y()); ++j)
       for (long i = ix(box_lo_[t].x()); i <= ix(box_hi_[t].x()); ++i)
-        columns_[static_cast<std::size_t>(i + nx_ * j)].push_back(static_cast<int>(t));
+        if (meets(i, j)) columns_[static_cast<std::size_t>(i + nx_ * j)].push_back(static_cast<int>(t));
+  }
   stamp_.assign(n, 0u);
   nz_ = std::max(1L, static_cast<long>(std::ceil((mesh.hi.z() - mesh.lo.z()) / w_)));
   cap_ = 4.0 * w_;
@@ -175,8 +200,8 @@ int MeshIndex::crossings_below(double x, double y, double z) const {
 
 std::string MeshIndex::footprint_misfit(double x, double y, double r) const {
   const int n = crossings_below(x, y, std::numeric_limits<double>::infinity());
-  std::ostringstream why;
   if (n % 2 == 0) {
+    std::ostringstream why;
     why << "(x, y) = (" << x << ", " << y << ") is outside the footprint of the mesh " << mesh_.file << ": the vertical "
         << "line there crosses it " << n << " times (" << (n == 0 ? "outside its rim, or over an open outlet" : "it is closed above there")
         << "), a grain dropped there would fall past it or land outside it";
@@ -189,6 +214,7 @@ std::string MeshIndex::footprint_misfit(double x, double y, double r) const {
     const double s = len2 > 0.0 ? std::clamp(((x - a.x()) * ex + (y - a.y()) * ey) / len2, 0.0, 1.0) : 0.0;
     const double dx = x - a.x() - s * ex, dy = y - a.y() - s * ey;
     if (dx * dx + dy * dy < r * r) {
+      std::ostringstream why;
       why << "(x, y) = (" << x << ", " << y << ") puts a grain of radius " << r << " over the open rim of the mesh "
           << mesh_.file << " (an edge of one triangle only, from (" << a.x() << ", " << a.y() << ", " << a.z() << ") to ("
           << b.x() << ", " << b.y() << ", " << b.z() << ")): it could land on the rim or outside it";

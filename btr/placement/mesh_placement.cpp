@@ -366,27 +366,44 @@ int Walker::slide_exact(Vec3& x, const Vec3& d) {
       if (rate < 0.0) s_max = std::min(s_max, inside / -rate);
     }
   }
-  if (!(s_max >= 0.1 * r) || !std::isfinite(s_max)) return 0;
-  s_max = std::min(s_max, 8.0 * r);  // a long slide in several moves: each gathers the triangles of a short box
+  if (!std::isfinite(s_max)) return 0;
+  const double s_exit = s_max, past = 1e-6 * r;  // past: how far a slide goes over onto a flat neighbour
+  s_max = std::min(s_max + past, 8.0 * r);  // a long slide in several moves: each gathers the triangles of a short box
   const Vec3 x0 = x, x1 = x0 + s_max * g;
   tris.clear();
   e.mesh.collect(x0.cwiseMin(x1) - Vec3::Constant(r), x0.cwiseMax(x1) + Vec3::Constant(r), tris);
   const double reach = r * (1.0 + 1e-9);
+  int flat_next = -1;  // a neighbour in the plane of the face slid on that the path enters past its edge
   for (int t : tris) {
     if (t == active[0].tri || (n == 2 && t == active[1].tri)) continue;
     double safe = e.mesh.distance(t, x0) - reach;
     const auto& f = e.mesh.mesh().triangles[static_cast<std::size_t>(t)];
     const Vec3 m = (V[f[1]] - V[f[0]]).cross(V[f[2]] - V[f[0]]).normalized();
     const double h = m.dot(x0 - V[f[0]]), rate = m.dot(g);
+    if (n == 1 && std::abs(std::abs(m.dot(nrm[0])) - 1.0) <= 1e-12 && std::abs(std::abs(h) - r) <= 1e-9 * r) {
+      // In the same plane, on the grain's side: the centre keeps r from that plane, so from t. The path
+      // goes on over t when it enters t's face past the edge.
+      Vec3 nn;
+      double margin;
+      if (flat_next < 0 && face_contact(t, x0 + (s_exit + past) * g, nn, margin)) flat_next = t;
+      continue;
+    }
     if (m.allFinite() && std::abs(h) > reach) {
       if (h * rate >= 0.0) continue;  // the line keeps at least |h| from the triangle's plane
       safe = std::max(safe, (std::abs(h) - reach) / std::abs(rate));
     }
     s_max = std::min(s_max, safe);
   }
+  // Past the edge only onto a flat neighbour; otherwise to the edge, where the walker takes over.
+  const bool over = flat_next >= 0 && s_max >= s_exit + past;
+  s_max = over ? s_exit + past : std::min(s_max, s_exit);
   if (!(s_max >= 0.1 * r)) return 0;
   const double s = first_grain_on_segment(e.grid, r, e.r_max, x0, g, s_max, nullptr, 0, arc_event.hits);
   x = x0 + s * g;
+  if (over && arc_event.hits.empty()) {
+    active[0].tri = flat_next;
+    active[0].key = -1000 - static_cast<std::int64_t>(flat_next);
+  }
   for (const Obstacle& o : arc_event.hits) {
     Partner p;
     p.key = o.key, p.c = o.c, p.R = o.R;
