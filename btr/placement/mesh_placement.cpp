@@ -55,6 +55,7 @@ struct Walker {
   Vec3 gathered_at = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   std::vector<int> tris;
   std::vector<Partner> entering;  // the partners a blocked step enters at its end
+  std::vector<Partner> scratch;   // reused: the loaded contacts of a step, the hits of a fall
   ArcEvent arc_event;
 
   double gap(const Partner& p, const Vec3& x) const {
@@ -172,7 +173,8 @@ struct Walker {
 void Walker::fall(Vec3& x) {
   const double tol = 1e-12 * r;
   double best = -std::numeric_limits<double>::infinity();
-  std::vector<Partner> hits;
+  std::vector<Partner>& hits = scratch;
+  hits.clear();
   auto offer = [&](double z, const Partner& p) {
     if (z > best + tol) {
       best = z;
@@ -450,7 +452,8 @@ Vec3 Walker::place(Vec3 x) {
   for (long step = 0; step < budget; ++step) {
     // Release the contacts that carry nothing.
     const Descent desc = descent_at(x);
-    std::vector<Partner> loaded;
+    std::vector<Partner>& loaded = scratch;
+    loaded.clear();
     for (std::size_t i = 0; i < active.size(); ++i)
       if (desc.loaded[i]) loaded.push_back(active[i]);
     active.swap(loaded);
@@ -555,7 +558,7 @@ Vec3 Walker::place(Vec3 x) {
 }  // namespace
 
 Vec3 place_in_mesh(const MeshEngine& engine, std::int64_t id, Vec3 x, double r) {
-  Walker w{engine, id, r, {}, {}, Vec3::Constant(std::numeric_limits<double>::quiet_NaN()), {}, {}, {}};
+  Walker w{engine, id, r, {}, {}, Vec3::Constant(std::numeric_limits<double>::quiet_NaN()), {}, {}, {}, {}};
   x = w.place(x);
   if (!x.allFinite()) throw PlacementError(id, "the placement ended at a non-finite position");
   if (engine.mesh.crossings_below(x.x(), x.y(), x.z()) % 2 == 0)
