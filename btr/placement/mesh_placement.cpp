@@ -56,6 +56,7 @@ struct Walker {
   std::vector<int> tris;
   std::vector<Partner> entering;  // the partners a blocked step enters at its end
   std::vector<Partner> scratch;   // reused: the loaded contacts of a step, the hits of a fall
+  std::vector<int> face_hits;     // reused: the faces a slide meets
   ArcEvent arc_event;
 
   double gap(const Partner& p, const Vec3& x) const {
@@ -376,6 +377,9 @@ int Walker::slide_exact(Vec3& x, const Vec3& d) {
   e.mesh.collect(x0.cwiseMin(x1) - Vec3::Constant(r), x0.cwiseMax(x1) + Vec3::Constant(r), tris);
   const double reach = r * (1.0 + 1e-9);
   int flat_next = -1;  // a neighbour in the plane of the face slid on that the path enters past its edge
+  double tri_s = std::numeric_limits<double>::infinity();  // the first face met (its plane, inside it)
+  std::vector<int>& tri_hits = face_hits;
+  tri_hits.clear();
   for (int t : tris) {
     if (t == active[0].tri || (n == 2 && t == active[1].tri)) continue;
     double safe = e.mesh.distance(t, x0) - reach;
@@ -392,16 +396,34 @@ int Walker::slide_exact(Vec3& x, const Vec3& d) {
     }
     if (m.allFinite() && std::abs(h) > reach) {
       if (h * rate >= 0.0) continue;  // the line keeps at least |h| from the triangle's plane
+      // Where the line comes within r of the plane; if the nearest point of the plane lies inside the
+      // face there, the face is met there (its edges and vertices are no nearer than its plane).
+      const double s_touch = (std::abs(h) - r) / std::abs(rate);
+      Vec3 nn;
+      double margin;
+      if (s_touch <= s_max && face_contact(t, x0 + s_touch * g, nn, margin)) {
+        if (s_touch < tri_s - 1e-13 * r) tri_s = s_touch, tri_hits.clear();
+        if (s_touch <= tri_s + 1e-13 * r) tri_hits.push_back(t);
+        continue;
+      }
       safe = std::max(safe, (std::abs(h) - reach) / std::abs(rate));
     }
     s_max = std::min(s_max, safe);
   }
   // Past the edge only onto a flat neighbour; otherwise to the edge, where the walker takes over.
-  const bool over = flat_next >= 0 && s_max >= s_exit + past;
+  const bool over = flat_next >= 0 && s_max >= s_exit + past && tri_s > s_exit + past;
   s_max = over ? s_exit + past : std::min(s_max, s_exit);
-  if (!(s_max >= 0.1 * r)) return 0;
+  const bool face_met = tri_s <= s_max;  // an exact event: no shortest slide for it
+  if (face_met) s_max = tri_s;
+  else if (!(s_max >= 0.1 * r)) return 0;
   const double s = first_grain_on_segment(e.grid, r, e.r_max, x0, g, s_max, nullptr, 0, arc_event.hits);
   x = x0 + s * g;
+  if (face_met && s >= tri_s - 1e-13 * r)
+    for (int t : tri_hits) {
+      Partner p;
+      p.key = -1000 - static_cast<std::int64_t>(t), p.tri = t;
+      add(p, x);
+    }
   if (over && arc_event.hits.empty()) {
     active[0].tri = flat_next;
     active[0].key = -1000 - static_cast<std::int64_t>(flat_next);
@@ -558,7 +580,7 @@ Vec3 Walker::place(Vec3 x) {
 }  // namespace
 
 Vec3 place_in_mesh(const MeshEngine& engine, std::int64_t id, Vec3 x, double r) {
-  Walker w{engine, id, r, {}, {}, Vec3::Constant(std::numeric_limits<double>::quiet_NaN()), {}, {}, {}, {}};
+  Walker w{engine, id, r, {}, {}, Vec3::Constant(std::numeric_limits<double>::quiet_NaN()), {}, {}, {}, {}, {}};
   x = w.place(x);
   if (!x.allFinite()) throw PlacementError(id, "the placement ended at a non-finite position");
   if (engine.mesh.crossings_below(x.x(), x.y(), x.z()) % 2 == 0)
