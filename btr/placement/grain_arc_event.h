@@ -1,7 +1,7 @@
 #pragma once
-// The first event of a grain rolling on fixed grains only, along a circular arc: the exact roll of the
-// analytic engine (btr/placement/deposition.cpp) without its walls, for the mesh placement's stretches
-// away from every triangle (btr/placement/mesh_placement.cpp).
+// The first event of a grain moving among fixed grains along a circular arc (the exact roll of the
+// analytic engine, btr/placement/deposition.cpp, without its walls) or a straight segment (a slide down a
+// face), for the mesh placement's exact moves where no triangle can be met (btr/placement/mesh_placement.cpp).
 #include <cstdint>
 #include <vector>
 

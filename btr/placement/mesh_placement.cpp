@@ -1,6 +1,8 @@
 // The placement of one grain in a mesh container (docs/design.md, "Mesh containers"). The state is the
 // centre x and its active contacts, as in btr/placement/deposition.cpp; each event asks where gravity
-// pushes the grain (descend) and moves it:
+// pushes the grain (descend) and moves it. Where no triangle can be met the move is exact in one event
+// (roll_exact: on grains, or a grain and a face, along a circle; slide_exact: straight down a face or a
+// groove of two); otherwise, and for edges and vertices, the walker steps:
 //   no contact     a vertical fall, solved exactly against grains and triangles;
 //   one or two     along the set of positions keeping those contacts, in steps of at most r/10 (each
 //                  projected back onto the contacts, so the path lies exactly on them: a meridian of a
