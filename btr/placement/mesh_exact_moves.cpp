@@ -183,7 +183,9 @@ int Walker::slide_exact(Vec3& x, const Vec3& d) {
     const auto& f = e.mesh.mesh().triangles[static_cast<std::size_t>(t)];
     const Vec3 m = (V[f[1]] - V[f[0]]).cross(V[f[2]] - V[f[0]]).normalized();
     const double h = m.dot(x0 - V[f[0]]), rate = m.dot(g);
-    if (n == 1 && std::abs(std::abs(m.dot(nrm[0])) - 1.0) <= 1e-12 && std::abs(std::abs(h) - r) <= 1e-9 * r) {
+    // Towards the grain, t's normal is the face's (not a parallel face on the far side of the grain).
+    const bool facing = (h > 0.0 ? m : Vec3(-m)).dot(nrm[0]) >= 1.0 - 1e-12;
+    if (n == 1 && facing && std::abs(std::abs(h) - r) <= 1e-9 * r) {
       // In the same plane, on the grain's side: the centre keeps r from that plane, so from t. The path
       // goes on over t when it enters t's face past the edge.
       Vec3 nn;
