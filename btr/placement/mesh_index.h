@@ -1,7 +1,8 @@
 #pragma once
-// The triangles of a mesh container for the placement: a grid of columns holding each triangle by its
-// bounding box (the mesh never moves, so it is indexed once, apart from the grains' NeighbourGrid), the
-// closest point of a triangle, and the mesh's footprint: where a grain dropped from above lands inside.
+// The triangles of a mesh container for the placement: a grid of columns holding each triangle where its
+// shadow on the x-y plane falls (the mesh never moves, so it is indexed once, apart from the grains'
+// NeighbourGrid), the closest point of a triangle, a lower bound of the distance to the mesh, and the
+// mesh's footprint: where a grain dropped from above lands inside.
 #include <limits>
 #include <string>
 #include <vector>
@@ -22,7 +23,8 @@ class MeshIndex {
   Vec3 closest(int t, const Vec3& x) const;
   double distance(int t, const Vec3& x) const { return (x - closest(t, x)).norm(); }
 
-  // Every triangle whose bounding box meets the box [lo, hi], once each, in increasing index (appended).
+  // Every triangle whose bounding box meets the box [lo, hi] and whose shadow meets a column under it (so
+  // every triangle with a point in the box), once each, in increasing index (appended).
   void collect(const Vec3& lo, const Vec3& hi, std::vector<int>& out) const;
 
   // The highest centre height z <= x.z at which a sphere of radius r on the vertical line through x
