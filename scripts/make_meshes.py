@@ -11,6 +11,8 @@ mesh_cylinder.stl the cylinder of inputs/cylinder.toml (radius 15 mm) as a polyg
                   equals the circle's (the polygon's circumradius is R sqrt(2 pi / (n sin(2 pi / n)))),
                   height 60 mm, flat bottom, open top: 288 facets.
 open_hopper.stl   the hopper with its outlet left open (for the tests: grains over it are refused).
+tall_hopper.stl   the hopper with a vertical wall of radius 20 mm on its rim up to z = 50 mm (docs/mesh's
+                  1e5-grain benchmark: the hopper alone overflows its rim before that).
 Every facet shares its vertices with its neighbours, so the mesh's edges are known by their ends.
 """
 import math
@@ -72,6 +74,10 @@ def hopper(n=48, closed=True):
     return tris
 
 
+def tall_hopper(n=48, height=50.0):
+    return hopper(n) + band(ring(20.0, 25.0, n), ring(20.0, height, n))
+
+
 def silo(n=48, radius=15.0, height=40.0, levels=2):
     rings = [ring(radius, height * i / levels, n) for i in range(levels + 1)]
     tris = disk(rings[0], (0.0, 0.0, 0.0))
@@ -90,6 +96,7 @@ def main():
     write_stl(os.path.join(root, "tests", "data", "mesh_cylinder.stl"), "mesh_cylinder",
               silo(n=n, radius=circumradius, height=60.0, levels=1))
     write_stl(os.path.join(root, "tests", "data", "open_hopper.stl"), "open_hopper", hopper(closed=False))
+    write_stl(os.path.join(root, "inputs", "tall_hopper.stl"), "tall_hopper", tall_hopper())
     return 0
 
 

@@ -32,11 +32,61 @@ MeshIndex::MeshIndex(const TriangleMesh& mesh, double cell) : mesh_(mesh) {
   nx_ = std::max(1L, static_cast<long>(std::ceil(lx / w_)));
   ny_ = std::max(1L, static_cast<long>(std::ceil(ly / w_)));
   columns_.resize(static_cast<std::size_t>(nx_ * ny_));
-  for (std::size_t t = 0; t < n; ++t)
+  // A column holds the triangles whose shadow on the x-y plane meets it (a slanted triangle's bounding box
+  // covers far more columns than the triangle does), by separating axes: the column's sides, and the
+  // normals of the shadow's sides, with a margin far above round-off.
+  for (std::size_t t = 0; t < n; ++t) {
+    const auto& f = mesh.triangles[t];
+    const double eps = 1e-9 * w_;
+    auto meets = [&](long i, long j) {
+      const double cx0 = x0_ + static_cast<double>(i) * w_ - eps, cx1 = x0_ + static_cast<double>(i + 1) * w_ + eps;
+      const double cy0 = y0_ + static_cast<double>(j) * w_ - eps, cy1 = y0_ + static_cast<double>(j + 1) * w_ + eps;
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 &a = V[f[k]], &b = V[f[(k + 1) % 3]];
+        const double nx = b.y() - a.y(), ny = a.x() - b.x();
+        if (nx == 0.0 && ny == 0.0) continue;
+        double tmin = std::numeric_limits<double>::infinity(), tmax = -tmin;
+        for (int m = 0; m < 3; ++m) {
+          const double p = nx * V[f[m]].x() + ny * V[f[m]].y();
+          tmin = std::min(tmin, p), tmax = std::max(tmax, p);
+        }
+        const double c[4] = {nx * cx0 + ny * cy0, nx * cx1 + ny * cy0, nx * cx0 + ny * cy1, nx * cx1 + ny * cy1};
+        const double cmin = std::min({c[0], c[1], c[2], c[3]}), cmax = std::max({c[0], c[1], c[2], c[3]});
+        const double slack = 1e-9 * (std::abs(tmin) + std::abs(tmax) + std::abs(cmin) + std::abs(cmax));
+        if (cmax < tmin - slack || cmin > tmax + slack) return false;
+      }
+      return true;
+    };
     for (long j = iy(box_lo_[t].y()); j <= iy(box_hi_[t].y()); ++j)
       for (long i = ix(box_lo_[t].x()); i <= ix(box_hi_[t].x()); ++i)
-        columns_[static_cast<std::size_t>(i + nx_ * j)].push_back(static_cast<int>(t));
+        if (meets(i, j)) columns_[static_cast<std::size_t>(i + nx_ * j)].push_back(static_cast<int>(t));
+  }
   stamp_.assign(n, 0u);
+  nz_ = std::max(1L, static_cast<long>(std::ceil((mesh.hi.z() - mesh.lo.z()) / w_)));
+  cap_ = 4.0 * w_;
+  if (static_cast<double>(nx_) * static_cast<double>(ny_) * static_cast<double>(nz_) <= 1 << 24)
+    field_.assign(static_cast<std::size_t>(nx_ * ny_ * nz_), std::numeric_limits<float>::quiet_NaN());
+}
+
+double MeshIndex::clearance(const Vec3& x) const {
+  const Vec3 outside = (mesh_.lo - x).cwiseMax(x - mesh_.hi).cwiseMax(0.0);
+  if (outside.squaredNorm() > 0.0) return outside.norm();
+  if (field_.empty()) return 0.0;
+  const long i = ix(x.x()), j = iy(x.y());
+  const long k = std::clamp(static_cast<long>(std::floor((x.z() - mesh_.lo.z()) / w_)), 0L, nz_ - 1);
+  const Vec3 centre(x0_ + (static_cast<double>(i) + 0.5) * w_, y0_ + (static_cast<double>(j) + 0.5) * w_,
+                    mesh_.lo.z() + (static_cast<double>(k) + 0.5) * w_);
+  float& cell = field_[static_cast<std::size_t>(i + nx_ * (j + ny_ * k))];
+  if (std::isnan(cell)) {
+    std::vector<int> near;
+    collect(centre - Vec3::Constant(cap_), centre + Vec3::Constant(cap_), near);
+    double d = cap_;
+    for (int t : near) d = std::min(d, distance(t, centre));
+    float f = static_cast<float>(d);
+    if (static_cast<double>(f) > d) f = std::nextafter(f, 0.0f);
+    cell = f;
+  }
+  return std::max(0.0, static_cast<double>(cell) - (x - centre).norm());
 }
 
 long MeshIndex::ix(double x) const { return std::clamp(static_cast<long>(std::floor((x - x0_) / w_)), 0L, nx_ - 1); }
@@ -87,12 +137,22 @@ void MeshIndex::collect(const Vec3& lo, const Vec3& hi, std::vector<int>& out) c
   std::sort(out.begin() + static_cast<long>(first), out.end());
 }
 
-double MeshIndex::fall_contact(int t, const Vec3& x, double r) const {
+double MeshIndex::fall_contact(int t, const Vec3& x, double r, double z_floor) const {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const Vec3& bl = box_lo_[static_cast<std::size_t>(t)];
   const Vec3& bh = box_hi_[static_cast<std::size_t>(t)];
   if (x.x() < bl.x() - r || x.x() > bh.x() + r || x.y() < bl.y() - r || x.y() > bh.y() + r) return nan;
   if (bl.z() - r > x.z()) return nan;
+  if (std::isfinite(z_floor)) {
+    // Within r of the triangle is within r of its plane: at most r / |n_z| above where the line crosses it.
+    const auto& f = mesh_.triangles[static_cast<std::size_t>(t)];
+    const Vec3& a = mesh_.vertices[f[0]];
+    const Vec3 n = (mesh_.vertices[f[1]] - a).cross(mesh_.vertices[f[2]] - a).normalized();
+    if (std::abs(n.z()) > 1e-3) {
+      const double z_plane = a.z() - (n.x() * (x.x() - a.x()) + n.y() * (x.y() - a.y())) / n.z();
+      if (z_plane + r / std::abs(n.z()) + 1e-9 * r < z_floor) return nan;
+    }
+  }
   // The distance along the line is convex in z: its minimum by golden section on [z_lo, z0], then the
   // highest height at distance r above the minimum by bisection.
   auto f = [&](double z) { return distance(t, Vec3(x.x(), x.y(), z)); };
@@ -140,8 +200,8 @@ int MeshIndex::crossings_below(double x, double y, double z) const {
 
 std::string MeshIndex::footprint_misfit(double x, double y, double r) const {
   const int n = crossings_below(x, y, std::numeric_limits<double>::infinity());
-  std::ostringstream why;
   if (n % 2 == 0) {
+    std::ostringstream why;
     why << "(x, y) = (" << x << ", " << y << ") is outside the footprint of the mesh " << mesh_.file << ": the vertical "
         << "line there crosses it " << n << " times (" << (n == 0 ? "outside its rim, or over an open outlet" : "it is closed above there")
         << "), a grain dropped there would fall past it or land outside it";
@@ -154,6 +214,7 @@ std::string MeshIndex::footprint_misfit(double x, double y, double r) const {
     const double s = len2 > 0.0 ? std::clamp(((x - a.x()) * ex + (y - a.y()) * ey) / len2, 0.0, 1.0) : 0.0;
     const double dx = x - a.x() - s * ex, dy = y - a.y() - s * ey;
     if (dx * dx + dy * dy < r * r) {
+      std::ostringstream why;
       why << "(x, y) = (" << x << ", " << y << ") puts a grain of radius " << r << " over the open rim of the mesh "
           << mesh_.file << " (an edge of one triangle only, from (" << a.x() << ", " << a.y() << ", " << a.z() << ") to ("
           << b.x() << ", " << b.y() << ", " << b.z() << ")): it could land on the rim or outside it";

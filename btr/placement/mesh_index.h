@@ -1,7 +1,9 @@
 #pragma once
-// The triangles of a mesh container for the placement: a grid of columns holding each triangle by its
-// bounding box (the mesh never moves, so it is indexed once, apart from the grains' NeighbourGrid), the
-// closest point of a triangle, and the mesh's footprint: where a grain dropped from above lands inside.
+// The triangles of a mesh container for the placement: a grid of columns holding each triangle where its
+// shadow on the x-y plane falls (the mesh never moves, so it is indexed once, apart from the grains'
+// NeighbourGrid), the closest point of a triangle, a lower bound of the distance to the mesh, and the
+// mesh's footprint: where a grain dropped from above lands inside.
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -21,12 +23,18 @@ class MeshIndex {
   Vec3 closest(int t, const Vec3& x) const;
   double distance(int t, const Vec3& x) const { return (x - closest(t, x)).norm(); }
 
-  // Every triangle whose bounding box meets the box [lo, hi], once each, in increasing index (appended).
+  // Every triangle whose bounding box meets the box [lo, hi] and whose shadow meets a column under it (so
+  // every triangle with a point in the box), once each, in increasing index (appended).
   void collect(const Vec3& lo, const Vec3& hi, std::vector<int>& out) const;
 
   // The highest centre height z <= x.z at which a sphere of radius r on the vertical line through x
-  // touches triangle t while moving down into it; NaN when it does not (passes beside it, or moves away).
-  double fall_contact(int t, const Vec3& x, double r) const;
+  // touches triangle t while moving down into it; NaN when it does not (passes beside it, or moves away),
+  // and may be NaN when that height is below z_floor (the triangle's plane puts it there).
+  double fall_contact(int t, const Vec3& x, double r, double z_floor = -std::numeric_limits<double>::infinity()) const;
+
+  // A lower bound of the distance from x to the mesh (0 near it, at most a few cells far from it): the
+  // distance from the centre of x's cell, computed once per cell, less the distance of x from that centre.
+  double clearance(const Vec3& x) const;
 
   // How many triangles the vertical line through (x, y) crosses below height z (odd: inside a cup).
   int crossings_below(double x, double y, double z) const;
@@ -49,6 +57,11 @@ class MeshIndex {
   std::vector<std::vector<int>> columns_;
   mutable std::vector<unsigned> stamp_;  // collect(): a triangle already taken in this call
   mutable unsigned visit_ = 0;
+  // clearance(): cells of width w_ over the mesh's box, each the distance of its centre from the mesh up
+  // to cap_ (rounded down), NaN until asked for; empty when there would be too many cells.
+  long nz_ = 0;
+  double cap_ = 0.0;
+  mutable std::vector<float> field_;
 };
 
 }  // namespace btr

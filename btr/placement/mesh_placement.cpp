@@ -1,6 +1,8 @@
 // The placement of one grain in a mesh container (docs/design.md, "Mesh containers"). The state is the
 // centre x and its active contacts, as in btr/placement/deposition.cpp; each event asks where gravity
-// pushes the grain (descend) and moves it:
+// pushes the grain (descend) and moves it. Where no triangle can be met the move is exact in one event
+// (roll_exact: on grains, or a grain and a face, along a circle; slide_exact: straight down a face or a
+// groove of two); otherwise, and for edges and vertices, the walker steps:
 //   no contact     a vertical fall, solved exactly against grains and triangles;
 //   one or two     along the set of positions keeping those contacts, in steps of at most r/10 (each
 //                  projected back onto the contacts, so the path lies exactly on them: a meridian of a
@@ -20,22 +22,11 @@
 #include <sstream>
 #include <vector>
 
-#include "btr/placement/deposition.h"
-#include "btr/placement/descent.h"
-#include "btr/placement/mesh_index.h"
-#include "btr/placement/neighbour_grid.h"
-#include "btr/placement/obstacle.h"
+#include "btr/placement/mesh_walker.h"
 
 namespace btr {
+namespace mesh_walk {
 namespace {
-
-// A contact partner: a fixed grain (one periodic image) or a triangle.
-struct Partner {
-  std::int64_t key = 0;  // sphere_key for grains, -1000 - t for triangle t
-  int tri = -1;
-  Vec3 c = Vec3::Zero();  // grain: centre
-  double R = 0.0;         // grain: contact distance r + r_j
-};
 
 std::uint64_t mix(std::uint64_t z) {
   z += 0x9e3779b97f4a7c15ULL;
@@ -44,129 +35,15 @@ std::uint64_t mix(std::uint64_t z) {
   return z ^ (z >> 31);
 }
 
-struct Walker {
-  const MeshEngine& e;
-  std::int64_t id;
-  double r;
-  std::vector<Partner> active;
-  std::vector<Partner> near;  // candidates gathered about `gathered_at`
-  Vec3 gathered_at = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
-  std::vector<int> tris;
-  std::vector<Partner> entering;  // the partners a blocked step enters at its end
-
-  double gap(const Partner& p, const Vec3& x) const {
-    return p.tri >= 0 ? e.mesh.distance(p.tri, x) - r : (x - p.c).norm() - p.R;
-  }
-  Vec3 normal(const Partner& p, const Vec3& x) const {
-    return p.tri >= 0 ? (x - e.mesh.closest(p.tri, x)).normalized() : (x - p.c).normalized();
-  }
-  bool has(std::int64_t key) const {
-    for (const Partner& p : active)
-      if (p.key == key) return true;
-    return false;
-  }
-  [[noreturn]] void fail(const std::string& what, const Vec3& x) const {
-    std::ostringstream why;
-    why << what << " at (" << x.x() << ", " << x.y() << ", " << x.z() << ") in the mesh " << e.mesh.mesh().file;
-    throw PlacementError(id, why.str());
-  }
-
-  // Adds a partner met at x; a triangle touching the grain where an active triangle does (their shared
-  // edge or vertex, up to 1e-7 r) replaces it.
-  void add(const Partner& p, const Vec3& x) {
-    if (has(p.key)) return;
-    if (p.tri >= 0) {
-      const Vec3 q = e.mesh.closest(p.tri, x);
-      for (Partner& a : active)
-        if (a.tri >= 0 && (e.mesh.closest(a.tri, x) - q).norm() <= 1e-7 * r) {
-          a = p;
-          return;
-        }
-    }
-    if (static_cast<int>(active.size()) >= kMaxContacts) {
-      std::ostringstream why;
-      why << "more than " << kMaxContacts << " simultaneous contacts";
-      fail(why.str(), x);
-    }
-    active.push_back(p);
-  }
-
-  // Candidates for a path within r/2 of x: grains whose contact sphere and triangles whose offset surface
-  // may reach it.
-  void gather(const Vec3& x) {
-    near.clear();
-    const Vec3 reach = Vec3::Constant(2.0 * r + e.r_max);
-    e.grid.visit_box(x - reach, x + reach, [&](std::int32_t i, const Vec3& c, double radius, int image) {
-      Partner p;
-      p.key = sphere_key(i, image), p.c = c, p.R = r + radius;
-      near.push_back(p);
-    });
-    tris.clear();
-    e.mesh.collect(x - Vec3::Constant(2.0 * r), x + Vec3::Constant(2.0 * r), tris);
-    for (int t : tris) {
-      Partner p;
-      p.key = -1000 - static_cast<std::int64_t>(t), p.tri = t;
-      near.push_back(p);
-    }
-    gathered_at = x;
-  }
-
-  // x moved back onto every active contact (Newton steps on their gaps, one or two contacts: a grain on
-  // three is at rest); false when it does not converge.
-  bool project(Vec3& x) const {
-    const std::size_t k = active.size();
-    if (k == 0 || k > 2) return k == 0;
-    // 1e-14 r, or a few ulps of the coordinates where they are large against r (a big container)
-    const double eps = 1e-14 * r + 1e-15 * x.cwiseAbs().maxCoeff();
-    for (int it = 0; it < 40; ++it) {
-      const double g0 = gap(active[0], x);
-      const Vec3 n0 = normal(active[0], x);
-      if (k == 1) {
-        if (std::abs(g0) <= eps) return x.allFinite();
-        x -= g0 * n0;
-        continue;
-      }
-      const double g1 = gap(active[1], x);
-      const Vec3 n1 = normal(active[1], x);
-      if (std::max(std::abs(g0), std::abs(g1)) <= eps) return x.allFinite();
-      // x -= N (N^T N)^-1 g with N = [n0 n1]
-      const double c = n0.dot(n1), det = 1.0 - c * c;
-      if (!(det > 1e-12)) return false;
-      const double l0 = (g0 - c * g1) / det, l1 = (g1 - c * g0) / det;
-      x -= l0 * n0 + l1 * n1;
-    }
-    return false;
-  }
-
-  Descent descent_at(const Vec3& x) const {
-    Vec3 n[kMaxContacts];
-    for (std::size_t i = 0; i < active.size(); ++i) n[i] = normal(active[i], x);
-    return descend(n, active.size());
-  }
-
-  // What a grain that cannot move on holds: its contacts (grain or triangle, with their normals).
-  std::string stuck(const char* what, const Vec3& x, const Vec3& d) const {
-    std::ostringstream s;
-    s << what << " (direction " << d.x() << ", " << d.y() << ", " << d.z() << "; contacts:";
-    for (const Partner& p : active) {
-      const Vec3 n = normal(p, x);
-      s << " " << (p.tri >= 0 ? "triangle " + std::to_string(p.tri) : "grain " + std::to_string((p.key >> 30) + 1))
-        << " normal (" << n.x() << ", " << n.y() << ", " << n.z() << ")";
-    }
-    s << ")";
-    return s.str();
-  }
-  void fall(Vec3& x);
-  bool roll_off_top(const Vec3& x, Vec3& d, std::uint64_t salt) const;
-  Vec3 place(Vec3 x);
-};
+}  // namespace
 
 // Straight down to the highest contact below, exactly: z_j + sqrt((r + r_j)^2 - h^2) for a grain, the
 // first height at distance r from a triangle (MeshIndex::fall_contact).
 void Walker::fall(Vec3& x) {
   const double tol = 1e-12 * r;
   double best = -std::numeric_limits<double>::infinity();
-  std::vector<Partner> hits;
+  std::vector<Partner>& hits = scratch;
+  hits.clear();
   auto offer = [&](double z, const Partner& p) {
     if (z > best + tol) {
       best = z;
@@ -188,11 +65,12 @@ void Walker::fall(Vec3& x) {
         p.key = sphere_key(i, image), p.c = c, p.R = R;
         offer(z_hit, p);
       });
+  // A triangle is met at most r above its highest point: those lower than the grain met are skipped.
+  const double z_lo = std::isfinite(best) ? best - r - 2.0 * tol : -std::numeric_limits<double>::infinity();
   tris.clear();
-  e.mesh.collect(Vec3(x.x() - r, x.y() - r, -std::numeric_limits<double>::infinity()), Vec3(x.x() + r, x.y() + r, x.z() + r),
-                 tris);
+  e.mesh.collect(Vec3(x.x() - r, x.y() - r, z_lo), Vec3(x.x() + r, x.y() + r, x.z() + r), tris);
   for (int t : tris) {
-    const double z_hit = e.mesh.fall_contact(t, x, r);
+    const double z_hit = e.mesh.fall_contact(t, x, r, best - 2.0 * tol);
     if (std::isnan(z_hit)) continue;
     Partner p;
     p.key = -1000 - static_cast<std::int64_t>(t), p.tri = t;
@@ -242,7 +120,8 @@ Vec3 Walker::place(Vec3 x) {
   for (long step = 0; step < budget; ++step) {
     // Release the contacts that carry nothing.
     const Descent desc = descent_at(x);
-    std::vector<Partner> loaded;
+    std::vector<Partner>& loaded = scratch;
+    loaded.clear();
     for (std::size_t i = 0; i < active.size(); ++i)
       if (desc.loaded[i]) loaded.push_back(active[i]);
     active.swap(loaded);
@@ -258,6 +137,13 @@ Vec3 Walker::place(Vec3 x) {
         return x;
     }
     d.normalize();
+    int exact = roll_exact(x, d);
+    if (exact == 0) exact = slide_exact(x, d);
+    if (exact == 2) return x;
+    if (exact == 1) {
+      h = h_max;
+      continue;
+    }
     if (!(gathered_at.allFinite()) || (x - gathered_at).norm() > 0.5 * r) gather(x);
     Vec3 y = x + h * d;
     if (!project(y) || !(y.z() < x.z()) || (y - x).norm() > 2.0 * h) {
@@ -337,10 +223,10 @@ Vec3 Walker::place(Vec3 x) {
   fail(why.str(), x);
 }
 
-}  // namespace
+}  // namespace mesh_walk
 
 Vec3 place_in_mesh(const MeshEngine& engine, std::int64_t id, Vec3 x, double r) {
-  Walker w{engine, id, r, {}, {}, Vec3::Constant(std::numeric_limits<double>::quiet_NaN()), {}, {}};
+  mesh_walk::Walker w{engine, id, r, {}, {}, Vec3::Constant(std::numeric_limits<double>::quiet_NaN()), {}, {}, {}, {}, {}};
   x = w.place(x);
   if (!x.allFinite()) throw PlacementError(id, "the placement ended at a non-finite position");
   if (engine.mesh.crossings_below(x.x(), x.y(), x.z()) % 2 == 0)

@@ -138,6 +138,30 @@ TEST(MeshPlacement, SlidesDownAFaceIntoAGroove) {
   EXPECT_LT((g.x - expect).norm(), 1e-8) << g.x.transpose() << " vs " << expect.transpose();
 }
 
+TEST(MeshPlacement, SlidesOntoAGrainRollsOffItsTopAndRestsBesideItInTheGroove) {
+  // The groove above; a first grain rests in it. A second, dropped upslope in the same plane y = 0.7,
+  // slides straight down the face onto it (an exact slide), is then at the top of the circle where its
+  // contact sphere meets the face's offset plane, rolls off sideways along that circle (an exact arc on a
+  // grain and a face) and down the groove, and rests touching both faces and the first grain.
+  const double a = 0.4, L = 10, r = 1.0;
+  const double zt = L * std::tan(a);
+  std::vector<Vec3> v = {{-L, -L, zt}, {0, -L, 0}, {0, L, 0}, {-L, L, zt}, {L, -L, zt}, {L, L, zt}};
+  std::vector<std::array<int, 3>> t;
+  quad(t, 0, 1, 2, 3);
+  quad(t, 1, 4, 5, 2);
+  const HandMesh h = hand_mesh(v, t);
+  Deposition dep(3, h.container, r);
+  const Grain g1 = dep.place(drop_at(Vec3(-3.0, 0.7, 0) + h.shift, r));
+  const Grain g2 = dep.place(drop_at(Vec3(-6.0, 0.7, 0) + h.shift, r));
+  EXPECT_NEAR((g2.x - g1.x).norm(), 2.0 * r, 1e-9);
+  const double bottom = r / std::cos(a);
+  EXPECT_NEAR(g2.x.x(), h.shift.x(), 1e-8);
+  EXPECT_NEAR(g2.x.z(), bottom + h.shift.z(), 1e-8);
+  EXPECT_NEAR(std::abs(g2.x.y() - g1.x.y()), 2.0 * r, 1e-8);
+  const CheckReport report = check_packing(dep.grains(), 3, h.container);
+  EXPECT_TRUE(report.ok()) << report.overlaps << " overlaps, " << report.unsupported << " unsupported";
+}
+
 TEST(MeshPlacement, FallsOntoAnEdgeRollsOffItAndFallsToTheFloor) {
   // A block of height H over x <= 0 beside a floor over x >= 0: top face, vertical side at x = 0, floor.
   const double H = 2.0, L = 10, r = 1.0;

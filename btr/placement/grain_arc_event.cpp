@@ -1,0 +1,168 @@
+// The grain and lift-off events of roll_on_arc in btr/placement/deposition.cpp, for spheres only; the
+// tolerances (a tangency at the start, ties between events) are the same.
+#include "btr/placement/grain_arc_event.h"
+
+#include <Eigen/Geometry>
+#include <cmath>
+
+#include "btr/placement/descent.h"
+#include "btr/placement/neighbour_grid.h"
+
+namespace btr {
+namespace {
+
+constexpr double kSkipTangency = 1e-9;
+constexpr double kApproach = 1e-9;
+constexpr double kTieT = 1e-13;
+
+}  // namespace
+
+void first_grain_event(const NeighbourGrid& grid, double r, double r_max, const Obstacle* supports, int n_supports,
+                       const CircleArc& arc, ArcEvent& ev) {
+  ev.t = arc.t_end;
+  ev.lift_off = -1;
+  ev.hits.clear();
+  auto is_support = [&](std::int64_t key) {
+    for (int k = 0; k < n_supports; ++k)
+      if (supports[k].key == key) return true;
+    return false;
+  };
+  auto offer = [&](double t, const Obstacle& o) {
+    if (t < ev.t - kTieT) ev.t = t, ev.hits.clear();
+    if (t <= ev.t + kTieT) {
+      for (const Obstacle& h : ev.hits)
+        if (h.key == o.key) return;
+      ev.hits.push_back(o);
+    }
+  };
+  double screen_t = -1.0, screen = 5.0;
+  auto offer_sphere = [&](const Obstacle& o) {
+    const Vec3 w = arc.C - o.c;
+    const double R2 = o.R * o.R;
+    const double K = w.squaredNorm() + arc.rho * arc.rho;
+    const double a = 2.0 * arc.rho * w.dot(arc.u), b = 2.0 * arc.rho * w.dot(arc.v);
+    const double excess = K - R2 * (1.0 + 1e-9);
+    if (excess > 0.0 && excess * excess > a * a + b * b) return;
+    if (is_support(o.key)) return;
+    const bool touching = std::abs(K + a - R2) <= 1e-9 * R2;
+    if (touching && b < -2.0 * kApproach * arc.rho * o.R) {
+      offer(0.0, o);
+      return;
+    }
+    if (screen_t != ev.t) screen_t = ev.t, screen = root_screen(ev.t + kTieT);
+    const double t = first_rising_root(-a, -b, K - R2, touching ? kSkipTangency : 0.0, ev.t + kTieT, screen);
+    if (t >= 0.0) offer(t, o);
+  };
+  // Near the arc's first 1.5 radii of travel first (where a rolling grain usually meets the next one),
+  // the rest only when no event was found there.
+  const Vec3 x0 = arc.at(0.0), reach = Vec3::Constant(r + r_max);
+  auto visit_part = [&](double t0, double t1) {
+    CircleArc part = arc;
+    if (t0 != 0.0) {
+      const double c0 = std::cos(t0), s0 = std::sin(t0);
+      part.u = c0 * arc.u + s0 * arc.v;
+      part.v = c0 * arc.v - s0 * arc.u;
+    }
+    part.t_end = t1 - t0;
+    Vec3 plo, phi;
+    part.bounds(plo, phi);
+    if (t0 == 0.0) plo = plo.cwiseMin(x0), phi = phi.cwiseMax(x0);
+    grid.visit_box(plo - reach, phi + reach, [&](std::int32_t i, const Vec3& c, double radius, int image) {
+      const double R = r + radius;
+      if ((c - c.cwiseMax(plo).cwiseMin(phi)).squaredNorm() > R * R) return;
+      Obstacle o;
+      o.kind = Obstacle::Kind::Sphere;
+      o.key = sphere_key(i, image);
+      o.c = c;
+      o.R = R;
+      offer_sphere(o);
+    });
+  };
+  const double first = std::min(arc.t_end, 1.5 * r / arc.rho);
+  visit_part(0.0, first);
+  if (ev.t > first) visit_part(first, ev.t);
+
+  if (n_supports != 2) return;
+  const Vec3 z = Vec3::UnitZ();
+  double lift_screen_t = ev.t, lift_screen = root_screen(ev.t);
+  for (int k = 0; k < 2; ++k) {
+    const Obstacle& other = supports[1 - k];
+    double a, b, c;
+    if (other.kind == Obstacle::Kind::Sphere) {
+      const Vec3 w = arc.C - other.c;
+      a = z.dot(arc.v.cross(w)), b = -z.dot(arc.u.cross(w)), c = arc.rho * z.dot(arc.u.cross(arc.v));
+    } else {
+      a = z.dot(arc.v.cross(other.c)), b = -z.dot(arc.u.cross(other.c)), c = 0.0;
+    }
+    if (lift_screen_t != ev.t) lift_screen_t = ev.t, lift_screen = root_screen(ev.t);
+    double roots[2];
+    const int n = trig_roots(a, b, c, kTieT, ev.t, roots, lift_screen);
+    for (int m = 0; m < n; ++m) {
+      const double t = std::min(roots[m] + 1e-7, 0.5 * (roots[m] + arc.t_end));
+      const Vec3 P = arc.at(t), T = arc.tangent(t);
+      const Vec3 g_perp = z - z.dot(T) * T;
+      if (unloads(g_perp, supports[k].normal(P), other.normal(P)) && roots[m] < ev.t - kTieT) {
+        ev.t = roots[m];
+        ev.hits.clear();
+        ev.lift_off = k;
+        break;
+      }
+    }
+  }
+}
+
+}  // namespace btr
+
+namespace btr {
+
+double first_grain_on_segment(const NeighbourGrid& grid, double r, double r_max, const Vec3& x0, const Vec3& g,
+                              double s_max, const std::int64_t* skip, int n_skip, std::vector<Obstacle>& hits) {
+  hits.clear();
+  double s_best = s_max;
+  const double tie = 1e-13 * r;
+  auto skipped = [&](std::int64_t key) {
+    for (int k = 0; k < n_skip; ++k)
+      if (skip[k] == key) return true;
+    return false;
+  };
+  // In chunks of a few radii, nearest first: a grain met within the chunks visited ends the search (one
+  // met earlier touches the segment before that point, so near a chunk already visited).
+  const double chunk = 4.0 * r;
+  const Vec3 reach = Vec3::Constant(r + r_max);
+  for (double s0 = 0.0; s0 < s_best; s0 += chunk) {
+    const double s1 = std::min(s_best, s0 + chunk);
+    const Vec3 a = x0 + s0 * g, b = x0 + s1 * g;
+    const Vec3 lo = a.cwiseMin(b), hi = a.cwiseMax(b);
+    grid.visit_box(lo - reach, hi + reach, [&](std::int32_t i, const Vec3& c, double radius, int image) {
+      const double R = r + radius;
+      if ((c - c.cwiseMax(lo).cwiseMin(hi)).squaredNorm() > R * R) return;
+      // |x0 + s g - c|^2 = R^2: s^2 + 2 p s + q = 0
+      const Vec3 w = x0 - c;
+      const double p = w.dot(g), q = w.squaredNorm() - R * R;
+      double s;
+      if (std::abs(q) <= 1e-9 * R * R) {
+        if (!(p < -kApproach * R)) return;  // touching and tangent or moving away
+        s = 0.0;
+      } else {
+        const double disc = p * p - q;
+        if (q < 0.0 || disc <= 0.0 || p >= 0.0) return;  // inside (round-off far exceeded), missed, or behind
+        s = -p - std::sqrt(disc);
+        if (s > s_best + tie) return;
+      }
+      const std::int64_t key = sphere_key(i, image);
+      if (skipped(key)) return;
+      Obstacle o;
+      o.kind = Obstacle::Kind::Sphere;
+      o.key = key;
+      o.c = c;
+      o.R = R;
+      if (s < s_best - tie) s_best = s, hits.clear();
+      for (const Obstacle& h : hits)
+        if (h.key == key) return;
+      hits.push_back(o);
+    });
+  }
+  return s_best;
+}
+
+}  // namespace btr
