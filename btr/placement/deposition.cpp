@@ -13,7 +13,9 @@
 
 #include "btr/placement/circle_arc.h"
 #include "btr/placement/cluster_placement.h"
+#include "btr/placement/contacts.h"
 #include "btr/placement/descent.h"
+#include "btr/placement/grain_arc_event.h"
 #include "btr/placement/mesh_index.h"
 #include "btr/placement/mesh_placement.h"
 #include "btr/placement/neighbour_grid.h"
@@ -38,70 +40,6 @@ std::uint64_t mix(std::uint64_t z) {
   z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
   return z ^ (z >> 31);
 }
-
-static_assert(std::is_trivially_destructible_v<Obstacle>, "Contacts never destroys its obstacles");
-
-// At most kMaxContacts (btr/placement/descent.h); one more sets `overflow`, which the placement reports as an error.
-// The items are raw storage (only the first n are ever read) and a copy copies n of them: a Contacts is
-// built and copied at every event, and initialising kMaxContacts obstacles each time cost more than the
-// contacts' own work.
-struct Contacts {
-  struct Items {
-    alignas(Obstacle) unsigned char raw[kMaxContacts * sizeof(Obstacle)];
-    Obstacle& operator[](int i) { return reinterpret_cast<Obstacle*>(raw)[i]; }
-    const Obstacle& operator[](int i) const { return reinterpret_cast<const Obstacle*>(raw)[i]; }
-  } item;
-  int n = 0;
-  bool overflow = false;
-  Contacts() {}  // user-provided: `Contacts{}` leaves the items alone
-  Contacts(const Contacts& o) : n(o.n), overflow(o.overflow) {
-    for (int i = 0; i < n; ++i) new (&item[i]) Obstacle(o.item[i]);
-  }
-  Contacts& operator=(const Contacts& o) {
-    if (this == &o) return *this;
-    n = o.n;
-    overflow = o.overflow;
-    for (int i = 0; i < n; ++i) new (&item[i]) Obstacle(o.item[i]);
-    return *this;
-  }
-  bool has(std::int64_t key) const {
-    for (int i = 0; i < n; ++i)
-      if (item[i].key == key) return true;
-    return false;
-  }
-  void add(const Obstacle& o) {
-    if (has(o.key)) return;
-    if (n < kMaxContacts) new (&item[n++]) Obstacle(o);
-    else overflow = true;
-  }
-  void add_all(const Contacts& other) {
-    for (int k = 0; k < other.n; ++k) add(other.item[k]);
-    overflow |= other.overflow;
-  }
-  void remove(int i) {
-    for (int k = i; k + 1 < n; ++k) item[k] = item[k + 1];
-    --n;
-  }
-};
-
-// The first event found along a path: its parameter and the obstacles met there.
-// A constructor rather than aggregate initialisation: `Event{t, {}, -1}` zero-filled the whole of `hits`
-// (800 bytes) at every fall and roll.
-struct Event {
-  explicit Event(double t_end) : t(t_end) {}
-  double t;
-  Contacts hits;
-  int lift_off = -1;  // index in the active contacts of a support that unloads
-  void offer(double t_new, const Obstacle& o, double tol) {
-    if (t_new < t - tol) {
-      t = t_new;
-      hits.n = 0;
-      hits.overflow = false;
-      lift_off = -1;
-    }
-    if (t_new <= t + tol) hits.add(o);
-  }
-};
 
 // A grain rolling on one support keeps its centre on the support's contact sphere |x - p.c| = p.R, so
 // of the grains gathered around its path only those whose own contact sphere reaches that one can ever
@@ -241,26 +179,7 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
                                    const std::vector<Obstacle>& walls) {
   const double t_tol = 1e-13;
   Event ev(arc.t_end);
-  double screen_t = -1.0, screen = 5.0;  // root_screen of the event so far, for the parameter screen_t
 
-  auto offer_sphere = [&](const Obstacle& o) {
-    const Vec3 w = arc.C - o.c;
-    const double R2 = o.R * o.R;
-    const double K = w.squaredNorm() + arc.rho * arc.rho;
-    const double a = 2.0 * arc.rho * w.dot(arc.u), b = 2.0 * arc.rho * w.dot(arc.v);
-    // The whole circle passes outside: min D = K - sqrt(a^2 + b^2) > R^2 (squared, without the root).
-    const double excess = K - R2 * (1.0 + 1e-9);
-    if (excess > 0.0 && excess * excess > a * a + b * b) return;
-    if (active.has(o.key)) return;
-    // Distance squared D(t) = K + a cos t + b sin t; the grain enters where D falls through R^2.
-    // Touching at the start: an event now if approaching; otherwise skip the tangency itself
-    // (round-off puts a root there) and look for the next crossing.
-    const bool touching = std::abs(K + a - R2) <= 1e-9 * R2;
-    if (touching && b < -2.0 * kApproach * arc.rho * o.R) { ev.offer(0.0, o, t_tol); return; }
-    if (screen_t != ev.t) screen_t = ev.t, screen = root_screen(ev.t + t_tol);
-    double t = first_rising_root(-a, -b, K - R2, touching ? kSkipTangency : 0.0, ev.t + t_tol, screen);
-    if (t >= 0.0) ev.offer(t, o, t_tol);
-  };
   auto offer_plane = [&](const Obstacle& o) {
     if (active.has(o.key)) return;
     const double g0 = o.c.dot(arc.C) - o.R;
@@ -313,67 +232,8 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
     else if (drum_container && w.is_floor()) continue;
     else offer_plane(w);
   }
-  // The grains near the arc, in two parts: first those near its first stretch (1.5 radii of
-  // travel), where a rolling grain usually meets the next one; only if no event is found there, those
-  // near the rest of the arc up to the event so far. An obstacle met before the event found lies near
-  // the part of the arc before it, so the first visit alone suffices when the event is in its part.
-  const Vec3 reach = Vec3::Constant(r + r_max);
-  auto visit_part = [&](double t0, double t1) {
-    CircleArc part = arc;
-    if (t0 != 0.0) {
-      const double c0 = std::cos(t0), s0 = std::sin(t0);
-      part.u = c0 * arc.u + s0 * arc.v;
-      part.v = c0 * arc.v - s0 * arc.u;
-    }
-    part.t_end = t1 - t0;
-    Vec3 plo, phi;
-    part.bounds(plo, phi);
-    if (t0 == 0.0) plo = plo.cwiseMin(x), phi = phi.cwiseMax(x);  // the start exactly, whatever round-off
-    grid.visit_box(plo - reach, phi + reach, [&](std::int32_t i, const Vec3& c, double radius, int image) {
-      const double R = r + radius;
-      if ((c - c.cwiseMax(plo).cwiseMin(phi)).squaredNorm() > R * R) return;  // too far from the part's box
-      offer_sphere(sphere(i, c, radius, image, r));
-    });
-  };
-  const double first = std::min(arc.t_end, 1.5 * r / arc.rho);
-  visit_part(0.0, first);
-  if (ev.t > first) visit_part(first, ev.t);
-
-  // A support lifts off where its load changes sign: gravity's part normal to the path is then
-  // parallel to the other support's normal, det(z, T(t), N_other(t)) = 0.
-  if (active.n == 2) {
-    const Vec3 z = Vec3::UnitZ();
-    double lift_screen_t = ev.t, lift_screen = root_screen(ev.t);  // recomputed only when a lift-off moves ev.t
-    for (int k = 0; k < 2; ++k) {
-      const Obstacle& other = active.item[1 - k];
-      double a, b, c;
-      if (other.kind == Obstacle::Kind::Sphere) {
-        const Vec3 w = arc.C - other.c;
-        a = z.dot(arc.v.cross(w));
-        b = -z.dot(arc.u.cross(w));
-        c = arc.rho * z.dot(arc.u.cross(arc.v));
-      } else {
-        a = z.dot(arc.v.cross(other.c));
-        b = -z.dot(arc.u.cross(other.c));
-        c = 0.0;
-      }
-      if (lift_screen_t != ev.t) lift_screen_t = ev.t, lift_screen = root_screen(ev.t);
-      double roots[2];
-      const int n = trig_roots(a, b, c, t_tol, ev.t, roots, lift_screen);
-      for (int m = 0; m < n; ++m) {
-        // Load of support k just after the root.
-        const double t = std::min(roots[m] + 1e-7, 0.5 * (roots[m] + arc.t_end));
-        const Vec3 P = arc.at(t), T = arc.tangent(t);
-        const Vec3 g_perp = z - z.dot(T) * T;
-        if (unloads(g_perp, active.item[k].normal(P), other.normal(P)) && roots[m] < ev.t - t_tol) {
-          ev.t = roots[m];
-          ev.hits.n = 0;
-          ev.lift_off = k;
-          break;
-        }
-      }
-    }
-  }
+  offer_grains_on_arc(grid, r, r_max, active, arc, x, ev);
+  if (active.n == 2) offer_lift_offs(active, arc, ev);
 
   x = arc.at(ev.t);
   if (ev.lift_off >= 0) active.remove(ev.lift_off);
@@ -803,23 +663,15 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
       arc.t_end = std::max(0.0, std::atan2(arc.u.z(), -arc.v.z()));  // the support's equator
     } else if (drums == 0 && ((spheres == 2 && planes == 0 && cylinders == 0) ||
                               (spheres == 1 && planes == 1 && cylinders == 0))) {
-      Vec3 axis;
+      int qi = pi;  // the second support: the plane, or the second sphere
       if (spheres == 2) {
-        int qi = si + 1;
+        qi = si + 1;
         while (active.item[qi].kind != Obstacle::Kind::Sphere) ++qi;
-        const Obstacle& q = active.item[qi];
-        const double D = (q.c - p.c).norm();
-        axis = (q.c - p.c) / D;
-        const double s = (p.R * p.R - q.R * q.R + D * D) / (2.0 * D);
-        arc.C = p.c + s * axis;
-        arc.rho = std::sqrt(std::max(0.0, p.R * p.R - s * s));
-      } else {
-        const Obstacle& w = active.item[pi];
-        axis = w.c;
-        const double s = w.R - w.c.dot(p.c);
-        arc.C = p.c + s * axis;
-        arc.rho = std::sqrt(std::max(0.0, p.R * p.R - s * s));
       }
+      const SupportCircle circle = support_circle(p, active.item[qi]);
+      const Vec3 axis = circle.axis;
+      arc.C = circle.C;
+      arc.rho = circle.rho;
       Vec3 radial = x - arc.C;
       radial -= radial.dot(axis) * axis;
       if (arc.rho <= 1e-12 * r || radial.norm() <= 1e-12 * r) {

@@ -1,5 +1,4 @@
-// The grain and lift-off events of roll_on_arc in btr/placement/deposition.cpp, for spheres only; the
-// tolerances (a tangency at the start, ties between events) are the same.
+// The events of a roll among fixed grains (grain_arc_event.h).
 #include "btr/placement/grain_arc_event.h"
 
 #include <Eigen/Geometry>
@@ -11,51 +10,45 @@
 namespace btr {
 namespace {
 
+// Arc parameter skipped after a tangency with a contact the grain is leaving (radians).
 constexpr double kSkipTangency = 1e-9;
+// A contact touched at the start of a path is met only if the path heads into it at least this
+// steeply (cosine of the angle with its normal); below it the path is tangent up to round-off.
 constexpr double kApproach = 1e-9;
+// Events closer than this (radians) are simultaneous.
 constexpr double kTieT = 1e-13;
 
 }  // namespace
 
-void first_grain_event(const NeighbourGrid& grid, double r, double r_max, const Obstacle* supports, int n_supports,
-                       const CircleArc& arc, ArcEvent& ev) {
-  ev.t = arc.t_end;
-  ev.lift_off = -1;
-  ev.hits.clear();
-  auto is_support = [&](std::int64_t key) {
-    for (int k = 0; k < n_supports; ++k)
-      if (supports[k].key == key) return true;
-    return false;
-  };
-  auto offer = [&](double t, const Obstacle& o) {
-    if (t < ev.t - kTieT) ev.t = t, ev.hits.clear();
-    if (t <= ev.t + kTieT) {
-      for (const Obstacle& h : ev.hits)
-        if (h.key == o.key) return;
-      ev.hits.push_back(o);
-    }
-  };
-  double screen_t = -1.0, screen = 5.0;
+void offer_grains_on_arc(const NeighbourGrid& grid, double r, double r_max, const Contacts& supports,
+                         const CircleArc& arc, const Vec3& start, Event& ev) {
+  double screen_t = -1.0, screen = 5.0;  // root_screen of the event so far, for the parameter screen_t
   auto offer_sphere = [&](const Obstacle& o) {
     const Vec3 w = arc.C - o.c;
     const double R2 = o.R * o.R;
     const double K = w.squaredNorm() + arc.rho * arc.rho;
     const double a = 2.0 * arc.rho * w.dot(arc.u), b = 2.0 * arc.rho * w.dot(arc.v);
+    // The whole circle passes outside: min D = K - sqrt(a^2 + b^2) > R^2 (squared, without the root).
     const double excess = K - R2 * (1.0 + 1e-9);
     if (excess > 0.0 && excess * excess > a * a + b * b) return;
-    if (is_support(o.key)) return;
+    if (supports.has(o.key)) return;
+    // Distance squared D(t) = K + a cos t + b sin t; the grain enters where D falls through R^2.
+    // Touching at the start: an event now if approaching; otherwise skip the tangency itself
+    // (round-off puts a root there) and look for the next crossing.
     const bool touching = std::abs(K + a - R2) <= 1e-9 * R2;
     if (touching && b < -2.0 * kApproach * arc.rho * o.R) {
-      offer(0.0, o);
+      ev.offer(0.0, o, kTieT);
       return;
     }
     if (screen_t != ev.t) screen_t = ev.t, screen = root_screen(ev.t + kTieT);
     const double t = first_rising_root(-a, -b, K - R2, touching ? kSkipTangency : 0.0, ev.t + kTieT, screen);
-    if (t >= 0.0) offer(t, o);
+    if (t >= 0.0) ev.offer(t, o, kTieT);
   };
-  // Near the arc's first 1.5 radii of travel first (where a rolling grain usually meets the next one),
-  // the rest only when no event was found there.
-  const Vec3 x0 = arc.at(0.0), reach = Vec3::Constant(r + r_max);
+  // In two parts: first the grains near the arc's first stretch (1.5 radii of travel), where a rolling grain
+  // usually meets the next one; only if no event is found there, those near the rest of the arc up to the
+  // event so far. An obstacle met before the event found lies near the part of the arc before it, so the
+  // first visit alone suffices when the event is in its part.
+  const Vec3 reach = Vec3::Constant(r + r_max);
   auto visit_part = [&](double t0, double t1) {
     CircleArc part = arc;
     if (t0 != 0.0) {
@@ -66,10 +59,10 @@ void first_grain_event(const NeighbourGrid& grid, double r, double r_max, const 
     part.t_end = t1 - t0;
     Vec3 plo, phi;
     part.bounds(plo, phi);
-    if (t0 == 0.0) plo = plo.cwiseMin(x0), phi = phi.cwiseMax(x0);
+    if (t0 == 0.0) plo = plo.cwiseMin(start), phi = phi.cwiseMax(start);  // the start exactly, whatever round-off
     grid.visit_box(plo - reach, phi + reach, [&](std::int32_t i, const Vec3& c, double radius, int image) {
       const double R = r + radius;
-      if ((c - c.cwiseMax(plo).cwiseMin(phi)).squaredNorm() > R * R) return;
+      if ((c - c.cwiseMax(plo).cwiseMin(phi)).squaredNorm() > R * R) return;  // too far from the part's box
       Obstacle o;
       o.kind = Obstacle::Kind::Sphere;
       o.key = sphere_key(i, image);
@@ -81,34 +74,50 @@ void first_grain_event(const NeighbourGrid& grid, double r, double r_max, const 
   const double first = std::min(arc.t_end, 1.5 * r / arc.rho);
   visit_part(0.0, first);
   if (ev.t > first) visit_part(first, ev.t);
+}
 
-  if (n_supports != 2) return;
+// A support lifts off where its load changes sign: gravity's part normal to the path is then parallel to the
+// other support's normal, det(z, T(t), N_other(t)) = 0.
+void offer_lift_offs(const Contacts& supports, const CircleArc& arc, Event& ev) {
   const Vec3 z = Vec3::UnitZ();
-  double lift_screen_t = ev.t, lift_screen = root_screen(ev.t);
+  double lift_screen_t = ev.t, lift_screen = root_screen(ev.t);  // recomputed only when a lift-off moves ev.t
   for (int k = 0; k < 2; ++k) {
-    const Obstacle& other = supports[1 - k];
+    const Obstacle& other = supports.item[1 - k];
     double a, b, c;
     if (other.kind == Obstacle::Kind::Sphere) {
       const Vec3 w = arc.C - other.c;
-      a = z.dot(arc.v.cross(w)), b = -z.dot(arc.u.cross(w)), c = arc.rho * z.dot(arc.u.cross(arc.v));
+      a = z.dot(arc.v.cross(w));
+      b = -z.dot(arc.u.cross(w));
+      c = arc.rho * z.dot(arc.u.cross(arc.v));
     } else {
-      a = z.dot(arc.v.cross(other.c)), b = -z.dot(arc.u.cross(other.c)), c = 0.0;
+      a = z.dot(arc.v.cross(other.c));
+      b = -z.dot(arc.u.cross(other.c));
+      c = 0.0;
     }
     if (lift_screen_t != ev.t) lift_screen_t = ev.t, lift_screen = root_screen(ev.t);
     double roots[2];
     const int n = trig_roots(a, b, c, kTieT, ev.t, roots, lift_screen);
     for (int m = 0; m < n; ++m) {
+      // Load of support k just after the root.
       const double t = std::min(roots[m] + 1e-7, 0.5 * (roots[m] + arc.t_end));
       const Vec3 P = arc.at(t), T = arc.tangent(t);
       const Vec3 g_perp = z - z.dot(T) * T;
-      if (unloads(g_perp, supports[k].normal(P), other.normal(P)) && roots[m] < ev.t - kTieT) {
+      if (unloads(g_perp, supports.item[k].normal(P), other.normal(P)) && roots[m] < ev.t - kTieT) {
         ev.t = roots[m];
-        ev.hits.clear();
+        ev.hits.n = 0;
         ev.lift_off = k;
         break;
       }
     }
   }
+}
+
+Event first_grain_event(const NeighbourGrid& grid, double r, double r_max, const Contacts& supports,
+                        const CircleArc& arc) {
+  Event ev(arc.t_end);
+  offer_grains_on_arc(grid, r, r_max, supports, arc, arc.at(0.0), ev);
+  if (supports.n == 2) offer_lift_offs(supports, arc, ev);
+  return ev;
 }
 
 }  // namespace btr

@@ -1,30 +1,32 @@
 #pragma once
-// The first event of a grain moving among fixed grains along a circular arc (the exact roll of the
-// analytic engine, btr/placement/deposition.cpp, without its walls) or a straight segment (a slide down a
-// face), for the mesh placement's exact moves where no triangle can be met (btr/placement/mesh_placement.cpp).
+// The events of a grain rolling among fixed grains along a circular arc: the grains it meets and, on two
+// supports, the first lift-off. One implementation for the analytic engine's roll (btr/placement/deposition.cpp,
+// which adds its walls) and the mesh placement's exact moves where no triangle can be met
+// (btr/placement/mesh_exact_moves.cpp); and the first grain met along a straight segment (a slide down a face).
 #include <cstdint>
 #include <vector>
 
 #include "btr/placement/circle_arc.h"
+#include "btr/placement/contacts.h"
 #include "btr/placement/obstacle.h"
 
 namespace btr {
 
 class NeighbourGrid;
 
-struct ArcEvent {
-  double t = 0.0;             // where along the arc: arc.t_end when nothing happens before it
-  int lift_off = -1;          // index in `supports` of a support that unloads at t
-  std::vector<Obstacle> hits;  // the grains met at t (none for a lift-off or the arc's end)
-};
+// Offers to ev the grains (spheres) of `grid` met by a grain of radius r (every radius at most r_max) moving
+// along `arc` from `start` (its centre now, arc.at(0) up to round-off); `supports` are never met. Grains near
+// the arc's first 1.5 radii of travel are read first, the rest only up to the event found so far.
+void offer_grains_on_arc(const NeighbourGrid& grid, double r, double r_max, const Contacts& supports,
+                         const CircleArc& arc, const Vec3& start, Event& ev);
 
-// Grains (spheres) of `grid` met by a grain of radius r (every radius at most r_max) moving along
-// `arc` from arc.at(0), and, with two supports, the first lift-off of one of them (the load of each
-// along the circle where their contact surfaces meet). `supports`: one or two spheres, or a sphere and
-// a plane; they are never met.
-void first_grain_event(const NeighbourGrid& grid, double r, double r_max, const Obstacle* supports, int n_supports,
-                       const CircleArc& arc, ArcEvent& ev);
+// With two supports (the circle where their contact surfaces meet), the first point before ev.t where one
+// of them unloads: ev becomes that lift-off (ev.lift_off its index in `supports`).
+void offer_lift_offs(const Contacts& supports, const CircleArc& arc, Event& ev);
 
+// The first event along `arc` among grains alone: both of the above from arc.at(0).
+Event first_grain_event(const NeighbourGrid& grid, double r, double r_max, const Contacts& supports,
+                        const CircleArc& arc);
 
 // The first grains met by a grain of radius r moving along the segment x0 + s g, s in [0, s_max] (g a
 // unit vector): the smallest s and the grains met there (none: s_max). A grain touched at x0 is met

@@ -62,20 +62,11 @@ int Walker::roll_exact(Vec3& x, const Vec3& d) {
     arc.v = (d - d.dot(arc.u) * arc.u).normalized();
     arc.t_end = std::max(0.0, std::atan2(arc.u.z(), -arc.v.z()));  // the support's equator
   } else {
-    Vec3 axis;
-    if (face < 0) {
-      const double D = (sup[1].c - sup[0].c).norm();
-      axis = (sup[1].c - sup[0].c) / D;
-      const double s = (sup[0].R * sup[0].R - sup[1].R * sup[1].R + D * D) / (2.0 * D);
-      arc.C = sup[0].c + s * axis;
-      arc.rho = std::sqrt(std::max(0.0, sup[0].R * sup[0].R - s * s));
-    } else {  // the circle where the grain's contact sphere meets the face's offset plane
-      const Obstacle &p = sup[1 - face], &w = sup[face];
-      axis = w.c;
-      const double s = w.R - w.c.dot(p.c);
-      arc.C = p.c + s * axis;
-      arc.rho = std::sqrt(std::max(0.0, p.R * p.R - s * s));
-    }
+    // Two grains' contact spheres, or a grain's and the face's offset plane.
+    const SupportCircle circle = face < 0 ? support_circle(sup[0], sup[1]) : support_circle(sup[1 - face], sup[face]);
+    const Vec3 axis = circle.axis;
+    arc.C = circle.C;
+    arc.rho = circle.rho;
     Vec3 radial = x - arc.C;
     radial -= radial.dot(axis) * axis;
     if (arc.rho <= 1e-12 * r || radial.norm() <= 1e-12 * r) return 0;
@@ -107,15 +98,23 @@ int Walker::roll_exact(Vec3& x, const Vec3& d) {
   CircleArc part = arc;
   const bool whole = clear * (1.0 - 1e-9) >= arc.rho * arc.t_end;
   if (!whole) part.t_end = clear * (1.0 - 1e-9) / arc.rho;
-  first_grain_event(e.grid, r, e.r_max, sup, n, part, arc_event);
-  x = arc.at(arc_event.t);
-  if (arc_event.lift_off >= 0) active.erase(active.begin() + arc_event.lift_off);
-  for (const Obstacle& o : arc_event.hits) {
+  Contacts supports;
+  for (int k = 0; k < n; ++k) supports.add(sup[k]);
+  const Event ev = first_grain_event(e.grid, r, e.r_max, supports, part);
+  x = arc.at(ev.t);
+  if (ev.hits.overflow) {
+    std::ostringstream why;
+    why << "more than " << kMaxContacts << " simultaneous contacts";
+    fail(why.str(), x);
+  }
+  if (ev.lift_off >= 0) active.erase(active.begin() + ev.lift_off);
+  for (int i = 0; i < ev.hits.n; ++i) {
+    const Obstacle& o = ev.hits.item[i];
     Partner p;
     p.key = o.key, p.c = o.c, p.R = o.R;
     add(p, x);
   }
-  if (whole && arc_event.lift_off < 0 && arc_event.hits.empty()) {
+  if (whole && ev.lift_off < 0 && ev.hits.n == 0) {
     if (n == 2) return 2;
     active.clear();  // at the support's equator it carries nothing: the grain falls
   }
@@ -215,7 +214,7 @@ int Walker::slide_exact(Vec3& x, const Vec3& d) {
   const bool face_met = tri_s <= s_max;  // an exact event: no shortest slide for it
   if (face_met) s_max = tri_s;
   else if (!(s_max >= 0.1 * r)) return 0;
-  const double s = first_grain_on_segment(e.grid, r, e.r_max, x0, g, s_max, nullptr, 0, arc_event.hits);
+  const double s = first_grain_on_segment(e.grid, r, e.r_max, x0, g, s_max, nullptr, 0, segment_hits);
   x = x0 + s * g;
   if (face_met && s >= tri_s - 1e-13 * r)
     for (int t : tri_hits) {
@@ -223,11 +222,11 @@ int Walker::slide_exact(Vec3& x, const Vec3& d) {
       p.key = -1000 - static_cast<std::int64_t>(t), p.tri = t;
       add(p, x);
     }
-  if (over && arc_event.hits.empty()) {
+  if (over && segment_hits.empty()) {
     active[0].tri = flat_next;
     active[0].key = -1000 - static_cast<std::int64_t>(flat_next);
   }
-  for (const Obstacle& o : arc_event.hits) {
+  for (const Obstacle& o : segment_hits) {
     Partner p;
     p.key = o.key, p.c = o.c, p.R = o.R;
     add(p, x);

@@ -37,7 +37,7 @@ struct Walker {
   std::vector<Partner> entering;  // the partners a blocked step enters at its end
   std::vector<Partner> scratch;   // reused: the loaded contacts of a step, the hits of a fall
   std::vector<int> face_hits;     // reused: the faces a slide meets
-  ArcEvent arc_event;
+  std::vector<Obstacle> segment_hits;  // reused: the grains a slide meets first
 
   double gap(const Partner& p, const Vec3& x) const {
     return p.tri >= 0 ? e.mesh.distance(p.tri, x) - r : (x - p.c).norm() - p.R;

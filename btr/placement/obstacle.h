@@ -5,6 +5,8 @@
 //   cylinder  the inside of a vertical cylinder about the z axis: |x_h| = R with R = R_c - r
 //   drum      the inside of a horizontal cylinder with its axis along y through c = (0, 0, z_axis):
 //             |(x - c) without y| = R with R = R_drum - r
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 #include "btr/model/grain.h"
@@ -54,5 +56,27 @@ struct Obstacle {
     return 0.0;
   }
 };
+
+// The circle along which a grain rolls on two supports: where its contact sphere about sphere p meets q's
+// contact sphere (q a sphere) or q's offset plane n.x = R (q a plane). rho is 0 where they only touch.
+struct SupportCircle {
+  Vec3 C, axis;  // centre, unit normal of its plane
+  double rho;
+};
+inline SupportCircle support_circle(const Obstacle& p, const Obstacle& q) {
+  SupportCircle k;
+  double s;
+  if (q.kind == Obstacle::Kind::Sphere) {
+    const double D = (q.c - p.c).norm();
+    k.axis = (q.c - p.c) / D;
+    s = (p.R * p.R - q.R * q.R + D * D) / (2.0 * D);
+  } else {
+    k.axis = q.c;
+    s = q.R - q.c.dot(p.c);
+  }
+  k.C = p.c + s * k.axis;
+  k.rho = std::sqrt(std::max(0.0, p.R * p.R - s * s));
+  return k;
+}
 
 }  // namespace btr

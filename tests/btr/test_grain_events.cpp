@@ -1,4 +1,4 @@
-// The exact grain events of the mesh placement's hybrid (btr/placement/grain_arc_event.h): a straight
+// The exact grain events of a roll (btr/placement/grain_arc_event.h, the analytic engine's and the mesh hybrid's): a straight
 // segment and a circular arc against fixed grains, in radii.
 #include <gtest/gtest.h>
 
@@ -40,11 +40,12 @@ TEST(GrainEvents, ArcOverOneGrainMeetsTheNextWhereTheirSpheresCross) {
   support.R = 2.0;
   CircleArc arc;
   arc.rho = 2.0, arc.u = Vec3::UnitZ(), arc.v = Vec3::UnitX(), arc.t_end = M_PI / 2;
-  ArcEvent ev;
-  first_grain_event(grid, 1.0, 1.0, &support, 1, arc, ev);
+  Contacts supports;
+  supports.add(support);
+  const Event ev = first_grain_event(grid, 1.0, 1.0, supports, arc);
   const double A = std::hypot(12.0, 2.0), phi = std::atan2(12.0, 2.0);
   EXPECT_NEAR(ev.t, phi - std::acos(9.25 / A), 1e-12);
-  ASSERT_EQ(ev.hits.size(), 1u);
-  EXPECT_NEAR((arc.at(ev.t) - ev.hits[0].c).norm(), 2.0, 1e-12);
+  ASSERT_EQ(ev.hits.n, 1);
+  EXPECT_NEAR((arc.at(ev.t) - ev.hits.item[0].c).norm(), 2.0, 1e-12);
   EXPECT_EQ(ev.lift_off, -1);
 }

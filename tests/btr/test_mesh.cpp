@@ -121,15 +121,19 @@ TEST(MeshPlacement, FallsOntoAFlatFaceAndRests) {
   EXPECT_NEAR(g2.x.z(), 1.0, 1e-9);
 }
 
-TEST(MeshPlacement, SlidesDownAFaceIntoAGroove) {
-  // A horizontal V groove along y: faces z = |x| tan(a) for |x| <= 10, |y| <= 10.
-  const double a = 0.4, L = 10, r = 1.0;
+// A horizontal V groove along y: faces z = |x| tan(a) for |x| <= L, |y| <= L.
+HandMesh groove(double a, double L) {
   const double zt = L * std::tan(a);
   std::vector<Vec3> v = {{-L, -L, zt}, {0, -L, 0}, {0, L, 0}, {-L, L, zt}, {L, -L, zt}, {L, L, zt}};
   std::vector<std::array<int, 3>> t;
   quad(t, 0, 1, 2, 3);
   quad(t, 1, 4, 5, 2);
-  const HandMesh h = hand_mesh(v, t);
+  return hand_mesh(v, t);
+}
+
+TEST(MeshPlacement, SlidesDownAFaceIntoAGroove) {
+  const double a = 0.4, L = 10, r = 1.0;
+  const HandMesh h = groove(a, L);
   Deposition dep(3, h.container, r);
   const Vec3 at = Vec3(-3.0, 0.7, 0) + h.shift;
   const Grain& g = dep.place(drop_at(at, r));
@@ -144,12 +148,7 @@ TEST(MeshPlacement, SlidesOntoAGrainRollsOffItsTopAndRestsBesideItInTheGroove) {
   // contact sphere meets the face's offset plane, rolls off sideways along that circle (an exact arc on a
   // grain and a face) and down the groove, and rests touching both faces and the first grain.
   const double a = 0.4, L = 10, r = 1.0;
-  const double zt = L * std::tan(a);
-  std::vector<Vec3> v = {{-L, -L, zt}, {0, -L, 0}, {0, L, 0}, {-L, L, zt}, {L, -L, zt}, {L, L, zt}};
-  std::vector<std::array<int, 3>> t;
-  quad(t, 0, 1, 2, 3);
-  quad(t, 1, 4, 5, 2);
-  const HandMesh h = hand_mesh(v, t);
+  const HandMesh h = groove(a, L);
   Deposition dep(3, h.container, r);
   const Grain g1 = dep.place(drop_at(Vec3(-3.0, 0.7, 0) + h.shift, r));
   const Grain g2 = dep.place(drop_at(Vec3(-6.0, 0.7, 0) + h.shift, r));

@@ -1,0 +1,76 @@
+#pragma once
+// The active contacts of a grain being placed and the first event along its path: the analytic engine's
+// (btr/placement/deposition.cpp) and the mesh placement's exact moves (btr/placement/mesh_exact_moves.cpp).
+#include <new>
+#include <type_traits>
+
+#include "btr/placement/descent.h"
+#include "btr/placement/obstacle.h"
+
+namespace btr {
+
+static_assert(std::is_trivially_destructible_v<Obstacle>, "Contacts never destroys its obstacles");
+
+// At most kMaxContacts (btr/placement/descent.h); one more sets `overflow`, which the placement reports as an error.
+// The items are raw storage (only the first n are ever read) and a copy copies n of them: a Contacts is
+// built and copied at every event, and initialising kMaxContacts obstacles each time cost more than the
+// contacts' own work.
+struct Contacts {
+  struct Items {
+    alignas(Obstacle) unsigned char raw[kMaxContacts * sizeof(Obstacle)];
+    Obstacle& operator[](int i) { return reinterpret_cast<Obstacle*>(raw)[i]; }
+    const Obstacle& operator[](int i) const { return reinterpret_cast<const Obstacle*>(raw)[i]; }
+  } item;
+  int n = 0;
+  bool overflow = false;
+  Contacts() {}  // user-provided: `Contacts{}` leaves the items alone
+  Contacts(const Contacts& o) : n(o.n), overflow(o.overflow) {
+    for (int i = 0; i < n; ++i) new (&item[i]) Obstacle(o.item[i]);
+  }
+  Contacts& operator=(const Contacts& o) {
+    if (this == &o) return *this;
+    n = o.n;
+    overflow = o.overflow;
+    for (int i = 0; i < n; ++i) new (&item[i]) Obstacle(o.item[i]);
+    return *this;
+  }
+  bool has(std::int64_t key) const {
+    for (int i = 0; i < n; ++i)
+      if (item[i].key == key) return true;
+    return false;
+  }
+  void add(const Obstacle& o) {
+    if (has(o.key)) return;
+    if (n < kMaxContacts) new (&item[n++]) Obstacle(o);
+    else overflow = true;
+  }
+  void add_all(const Contacts& other) {
+    for (int k = 0; k < other.n; ++k) add(other.item[k]);
+    overflow |= other.overflow;
+  }
+  void remove(int i) {
+    for (int k = i; k + 1 < n; ++k) item[k] = item[k + 1];
+    --n;
+  }
+};
+
+// The first event found along a path: its parameter and the obstacles met there.
+// A constructor rather than aggregate initialisation: `Event{t, {}, -1}` zero-filled the whole of `hits`
+// (800 bytes) at every fall and roll.
+struct Event {
+  explicit Event(double t_end) : t(t_end) {}
+  double t;
+  Contacts hits;
+  int lift_off = -1;  // index in the active contacts of a support that unloads
+  void offer(double t_new, const Obstacle& o, double tol) {
+    if (t_new < t - tol) {
+      t = t_new;
+      hits.n = 0;
+      hits.overflow = false;
+      lift_off = -1;
+    }
+    if (t_new <= t + tol) hits.add(o);
+  }
+};
+
+}  // namespace btr
