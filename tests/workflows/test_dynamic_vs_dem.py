@@ -103,6 +103,10 @@ def test_tiny_study_runs_both_sides(tmp_path, btr_binary, liggghts):
         summary = list(csv.DictReader(f))
     assert len(summary) == 1 and "core_end_error_fr0.01" in summary[0] and float(summary[0]["btr_n"]) == 2
     assert "## Mapping" in (moved / "report.md").read_text() and (moved / "mapping.png").exists()
+    said = []
+    dvd.run_dynamic_vs_dem(moved, "liggghts", "tiny", seeds=(1, 2), parts=("drum", "mapping"), progress=said.append,
+                           report_only=True)
+    assert sum("[mapping] reused" in str(m) for m in said) == 2, said
     assert [(r["side"], r["seed"], r["status"]) for r in only["drum"]] == \
         [("btr", 1, "ok"), ("btr", 2, "not run"), ("liggghts", 1, "ok")], only["drum"]
     assert only["drum"][0]["core_end"] == res["drum"][0]["core_end"]

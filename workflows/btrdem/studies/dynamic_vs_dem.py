@@ -251,7 +251,8 @@ class Study:
                                       if side == "btr" else dem_cpu_per_rev(d))
 
     def mapping_cases(self, rec):
-        """BTR alone over its own steps per revolution and lift, on every drum case, all seeds (dynamic_vs_dem_mapping)."""
+        """BTR alone over its own steps per revolution and lift, on every drum case, all seeds (dynamic_vs_dem_mapping);
+        with --reuse-runs (or --report-only) a run finished in its folder is read again."""
         m = self.plan["mapping"]
         for p in self.plan["drum"]:
             case = f"drum{p['dim']}d_{p['fill_name']}"
@@ -268,9 +269,14 @@ class Study:
                             sc["drum"].update(steps_per_revolution=spr, lift=lift * sc["container"]["radius"],
                                               revolutions=p["revolutions"], snapshot_every=max(1, spr // 20))
                             d.mkdir(parents=True, exist_ok=True)
-                            write_scene_toml(d / "scene.toml", sc)
-                            self._run([self.btr, "drum", str(d / "scene.toml"), "-o", str(d), "--quiet"], d,
-                                      "btr drum (mapping)")
+                            argv = [self.btr, "drum", str(d / "scene.toml"), "-o", str(d), "--quiet"]
+                            if self.reuse and finished_run(d, sc, argv) is not None:
+                                self.progress(f"  [mapping] reused the run finished in {d}")
+                            else:
+                                (d / FINISHED).unlink(missing_ok=True)
+                                write_scene_toml(d / "scene.toml", sc)
+                                res = self._run(argv, d, "btr drum (mapping)")
+                                mark_finished(d, sc, argv, res["cpu_seconds"])
                             row.update(drum_summary(read_steps(d / "drum_steps.csv"), spr))
 
     # ---- Brazil nut
