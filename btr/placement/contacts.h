@@ -9,6 +9,12 @@
 
 namespace btr {
 
+// Arc parameter skipped after a tangency with a contact the grain is leaving (radians).
+inline constexpr double kSkipTangency = 1e-9;
+// A contact touched at the start of a path is met only if the path heads into it at least this
+// steeply (cosine of the angle with its normal); below it the path is tangent up to round-off.
+inline constexpr double kApproach = 1e-9;
+
 static_assert(std::is_trivially_destructible_v<Obstacle>, "Contacts never destroys its obstacles");
 
 // At most kMaxContacts (btr/placement/descent.h); one more sets `overflow`, which the placement reports as an error.

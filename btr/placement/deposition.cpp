@@ -25,11 +25,6 @@
 namespace btr {
 namespace {
 
-// Arc parameter skipped after a tangency with a contact the grain is leaving (radians).
-constexpr double kSkipTangency = 1e-9;
-// A contact touched at the start of a path is met only if the path heads into it at least this
-// steeply (cosine of the angle with its normal); below it the path is tangent up to round-off.
-constexpr double kApproach = 1e-9;
 // Events in a row without the grain moving, its contacts cycling, after which it is wedged (place()).
 constexpr int kWedgedEvents = 12;
 

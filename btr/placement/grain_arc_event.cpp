@@ -10,11 +10,6 @@
 namespace btr {
 namespace {
 
-// Arc parameter skipped after a tangency with a contact the grain is leaving (radians).
-constexpr double kSkipTangency = 1e-9;
-// A contact touched at the start of a path is met only if the path heads into it at least this
-// steeply (cosine of the angle with its normal); below it the path is tangent up to round-off.
-constexpr double kApproach = 1e-9;
 // Events closer than this (radians) are simultaneous.
 constexpr double kTieT = 1e-13;
 
