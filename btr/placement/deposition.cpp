@@ -179,7 +179,9 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
     if (active.has(o.key)) return;
     const double g0 = o.c.dot(arc.C) - o.R;
     const double a = arc.rho * o.c.dot(arc.u), b = arc.rho * o.c.dot(arc.v);
-    const bool touching = std::abs(g0 + a) <= 1e-9 * r;
+    // Touching includes a start a hair inside (round-off of earlier rolls along the wall, up to the 1e-7 r
+    // that back_inside_walls puts right): moving further in from there is a contact at once.
+    const bool touching = g0 + a <= 1e-9 * r;
     if (touching && b < -kApproach * arc.rho) { ev.offer(0.0, o, t_tol); return; }
     double t = first_rising_root(-a, -b, g0, touching ? kSkipTangency : 0.0, ev.t + t_tol);
     if (t >= 0.0) ev.offer(t, o, t_tol);
@@ -214,7 +216,7 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
     const double K = w.squaredNorm() + arc.rho * arc.rho;
     const double a = 2.0 * arc.rho * w.dot(arc.u), b = 2.0 * arc.rho * w.dot(arc.v);
     const double R2 = o.R * o.R;
-    const bool touching = std::abs(K + a - R2) <= 1e-9 * R2;
+    const bool touching = K + a - R2 >= -1e-9 * R2;  // a start a hair beyond the wall included, as for planes
     if (touching && b > 2.0 * kApproach * arc.rho * o.R) { ev.offer(0.0, o, t_tol); return; }
     double t = first_rising_root(a, b, R2 - K, touching ? kSkipTangency : 0.0, ev.t + t_tol);
     if (t >= 0.0) ev.offer(t, o, t_tol);

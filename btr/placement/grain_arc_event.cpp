@@ -30,7 +30,7 @@ void offer_grains_on_arc(const NeighbourGrid& grid, double r, double r_max, cons
     // Distance squared D(t) = K + a cos t + b sin t; the grain enters where D falls through R^2.
     // Touching at the start: an event now if approaching; otherwise skip the tangency itself
     // (round-off puts a root there) and look for the next crossing.
-    const bool touching = std::abs(K + a - R2) <= 1e-9 * R2;
+    const bool touching = K + a - R2 <= 1e-9 * R2;  // a start a hair inside included, as for walls
     if (touching && b < -2.0 * kApproach * arc.rho * o.R) {
       ev.offer(0.0, o, kTieT);
       return;

@@ -2,7 +2,7 @@
 #   cmake -DBTR=<program> -DINPUTS=<inputs dir> -DWORK=<scratch dir> -DCASE=<case>
 #         [-DSCENE=<name in inputs/>] [-DCOUNT=<grains>] -P cli_case.cmake
 # Cases: deterministic, check, missing_scene, unknown_key, shake_series, shake_without_table, drum_series,
-# redeposit_series, redeposit_without_table. Fails with message(FATAL_ERROR).
+# redeposit_series, redeposit_without_table, drum_check. Fails with message(FATAL_ERROR).
 cmake_minimum_required(VERSION 3.18)
 
 # Runs the program; sets <prefix>_code and <prefix>_text (stdout + stderr).
@@ -140,6 +140,10 @@ elseif(CASE STREQUAL "shake_series")
     endif()
   endforeach()
 
+elseif(CASE STREQUAL "drum_check")
+  # A drum scene outside inputs/ (SCENE_PATH) for STEPS steps, every snapshot self-checked: it runs through.
+  run_btr(r drum "${SCENE_PATH}" -o "${WORK}/a" --steps ${STEPS} --check --quiet)
+  expect_code(r 0)
 elseif(CASE STREQUAL "drum_series")
   # Rotating drum: same scene and seed twice give byte-identical snapshots and step tables (less the
   # wall-time and CPU-time columns); every snapshot passes --check; the .pvd lists the snapshots with their angle.
