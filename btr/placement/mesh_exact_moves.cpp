@@ -11,15 +11,15 @@
 
 namespace btr::mesh_walk {
 
-// Does triangle t touch the grain at x on its face (not an edge or a vertex)? Then its unit normal
-// towards x and the in-plane distance of the contact point from the face's edges.
-bool Walker::face_contact(int t, const Vec3& x, Vec3& n, double& margin) const {
+// Does triangle t touch the grain at x (its plane at r from x, up to tol) on its face (not an edge or a
+// vertex)? Then its unit normal towards x and the in-plane distance of the contact point from the face's edges.
+bool Walker::face_contact(int t, const Vec3& x, Vec3& n, double& margin, double tol) const {
   const auto& V = e.mesh.mesh().vertices;
   const auto& f = e.mesh.mesh().triangles[static_cast<std::size_t>(t)];
   n = (V[f[1]] - V[f[0]]).cross(V[f[2]] - V[f[0]]).normalized();
   const double h = n.dot(x - V[f[0]]);
   if (h < 0.0) n = -n;
-  if (!n.allFinite() || std::abs(std::abs(h) - r) > 1e-9 * r) return false;
+  if (!n.allFinite() || std::abs(std::abs(h) - r) > tol) return false;
   margin = std::numeric_limits<double>::infinity();
   for (int j = 0; j < 3; ++j) {
     const Vec3 &a = V[f[j]], &b = V[f[(j + 1) % 3]], &c = V[f[(j + 2) % 3]];
@@ -45,7 +45,7 @@ int Walker::roll_exact(Vec3& x, const Vec3& d) {
   for (int k = 0; k < n; ++k) {
     sup[k].key = active[k].key;
     if (active[k].tri >= 0) {
-      if (n != 2 || face >= 0 || !face_contact(active[k].tri, x, sup[k].c, face_margin)) return 0;
+      if (n != 2 || face >= 0 || !face_contact(active[k].tri, x, sup[k].c, face_margin, 1e-9 * r)) return 0;
       face = k;
       sup[k].kind = Obstacle::Kind::Plane;
       sup[k].R = sup[k].c.dot(e.mesh.closest(active[k].tri, x)) + r;  // the centre's plane n.x = R
@@ -172,6 +172,10 @@ int Walker::slide_exact(Vec3& x, const Vec3& d) {
   tris.clear();
   e.mesh.collect(x0.cwiseMin(x1) - Vec3::Constant(r), x0.cwiseMax(x1) + Vec3::Constant(r), tris);
   const double reach = r * (1.0 + 1e-9);
+  // A neighbour counts as in the face's plane up to the rounding of the mesh's coordinates: the two triangles
+  // of a flat CAD panel are coplanar only to that (4e-6 r in the tall hopper), and stepping the walker over
+  // every such diagonal cost more than the exact moves around it.
+  const double flat_tol = std::max(1e-9 * r, 4.0 * e.mesh.vertex_roundoff());
   int flat_next = -1;  // a neighbour in the plane of the face slid on that the path enters past its edge
   double tri_s = std::numeric_limits<double>::infinity();  // the first face met (its plane, inside it)
   std::vector<int>& tri_hits = face_hits;
@@ -184,12 +188,12 @@ int Walker::slide_exact(Vec3& x, const Vec3& d) {
     const double h = m.dot(x0 - V[f[0]]), rate = m.dot(g);
     // Towards the grain, t's normal is the face's (not a parallel face on the far side of the grain).
     const bool facing = (h > 0.0 ? m : Vec3(-m)).dot(nrm[0]) >= 1.0 - 1e-12;
-    if (n == 1 && facing && std::abs(std::abs(h) - r) <= 1e-9 * r) {
-      // In the same plane, on the grain's side: the centre keeps r from that plane, so from t. The path
-      // goes on over t when it enters t's face past the edge.
+    if (n == 1 && facing && std::abs(std::abs(h) - r) <= flat_tol) {
+      // In the same plane (up to flat_tol), on the grain's side: the centre keeps r from that plane, so from
+      // t. The path goes on over t when it enters t's face past the edge.
       Vec3 nn;
       double margin;
-      if (flat_next < 0 && face_contact(t, x0 + (s_exit + past) * g, nn, margin)) flat_next = t;
+      if (flat_next < 0 && face_contact(t, x0 + (s_exit + past) * g, nn, margin, flat_tol)) flat_next = t;
       continue;
     }
     if (m.allFinite() && std::abs(h) > reach) {
@@ -199,7 +203,7 @@ int Walker::slide_exact(Vec3& x, const Vec3& d) {
       const double s_touch = (std::abs(h) - r) / std::abs(rate);
       Vec3 nn;
       double margin;
-      if (s_touch <= s_max && face_contact(t, x0 + s_touch * g, nn, margin)) {
+      if (s_touch <= s_max && face_contact(t, x0 + s_touch * g, nn, margin, 1e-9 * r)) {
         if (s_touch < tri_s - 1e-13 * r) tri_s = s_touch, tri_hits.clear();
         if (s_touch <= tri_s + 1e-13 * r) tri_hits.push_back(t);
         continue;
@@ -223,6 +227,21 @@ int Walker::slide_exact(Vec3& x, const Vec3& d) {
       add(p, x);
     }
   if (over && segment_hits.empty()) {
+    // Onto the neighbour's own plane (a move of at most flat_tol along its normal), unless a grain is that near.
+    const auto& f = e.mesh.mesh().triangles[static_cast<std::size_t>(flat_next)];
+    Vec3 m = (V[f[1]] - V[f[0]]).cross(V[f[2]] - V[f[0]]).normalized();
+    if (m.dot(x - V[f[0]]) < 0.0) m = -m;
+    const double lift = r - m.dot(x - V[f[0]]);
+    if (lift != 0.0) {
+      const Vec3 way = lift > 0.0 ? m : Vec3(-m);
+      first_grain_on_segment(e.grid, r, e.r_max, x, way, std::abs(lift), nullptr, 0, segment_hits);
+      if (!segment_hits.empty()) {  // to the edge instead, where the walker takes over
+        segment_hits.clear();
+        x = x0 + s_exit * g;
+        return 1;
+      }
+      x += lift * m;
+    }
     active[0].tri = flat_next;
     active[0].key = -1000 - static_cast<std::int64_t>(flat_next);
   }

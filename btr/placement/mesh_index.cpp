@@ -23,6 +23,9 @@ MeshIndex::MeshIndex(const TriangleMesh& mesh, double cell) : mesh_(mesh) {
       ++edge_use[{std::min(a, b), std::max(a, b)}];
     }
   }
+  double largest = 0.0;  // the largest file coordinate, scaled
+  for (const Vec3& v : V) largest = std::max(largest, (v - mesh.shift).cwiseAbs().maxCoeff());
+  vertex_roundoff_ = 0x1p-24 * largest;
   for (const auto& [e, uses] : edge_use)
     if (uses == 1) rim_.push_back({e.first, e.second});
   // Columns about the nominal width, at most 512 along each side (a large mesh with small grains).

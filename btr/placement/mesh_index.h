@@ -19,6 +19,11 @@ class MeshIndex {
   const TriangleMesh& mesh() const { return mesh_; }
   int size() const { return static_cast<int>(mesh_.triangles.size()); }
 
+  // How far a vertex may lie from where the CAD file meant it: half an ulp of a float32 file coordinate
+  // (STL stores single precision, and VTK's reader keeps it), scaled. The two triangles of a flat panel are
+  // coplanar only to about this.
+  double vertex_roundoff() const { return vertex_roundoff_; }
+
   // The point of triangle t closest to x.
   Vec3 closest(int t, const Vec3& x) const;
   double distance(int t, const Vec3& x) const { return (x - closest(t, x)).norm(); }
@@ -50,6 +55,7 @@ class MeshIndex {
   long iy(double y) const;
 
   const TriangleMesh& mesh_;
+  double vertex_roundoff_ = 0.0;
   std::vector<Vec3> box_lo_, box_hi_;  // each triangle's bounding box
   std::vector<std::array<int, 2>> rim_;  // edges of one triangle only (an open mesh's rims and outlets)
   double x0_, y0_, w_;

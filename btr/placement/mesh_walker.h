@@ -144,7 +144,7 @@ struct Walker {
   void fall(Vec3& x);
   int roll_exact(Vec3& x, const Vec3& d);
   int slide_exact(Vec3& x, const Vec3& d);
-  bool face_contact(int t, const Vec3& x, Vec3& n, double& margin) const;
+  bool face_contact(int t, const Vec3& x, Vec3& n, double& margin, double tol) const;
   bool roll_off_top(const Vec3& x, Vec3& d, std::uint64_t salt) const;
   Vec3 place(Vec3 x);
 };

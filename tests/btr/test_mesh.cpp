@@ -142,6 +142,29 @@ TEST(MeshPlacement, SlidesDownAFaceIntoAGroove) {
   EXPECT_LT((g.x - expect).norm(), 1e-8) << g.x.transpose() << " vs " << expect.transpose();
 }
 
+// The groove with one corner of the left face's panel raised or lowered by 1e-6 (its two triangles coplanar only
+// to the rounding of float32 coordinates, as a flat CAD panel read from STL): a grain sliding down that face
+// crosses the panel's diagonal, goes on onto the other triangle (at most 4 ulps of a float32 coordinate off
+// its plane, kept to that plane) and comes to rest in the groove as on the flat face, touching nothing.
+TEST(MeshPlacement, SlidesOverThePanelDiagonalThatIsFlatOnlyToRoundOff) {
+  const double a = 0.4, L = 10, r = 1.0;
+  for (const double lift : {1e-6, -1e-6}) {
+    const double zt = L * std::tan(a);
+    std::vector<Vec3> v = {{-L, -L, zt}, {0, -L, 0}, {0, L, 0}, {-L, L, zt + lift}, {L, -L, zt}, {L, L, zt}};
+    std::vector<std::array<int, 3>> t;
+    quad(t, 0, 1, 2, 3);  // the diagonal from (-L, -L) to (0, L): a drop at x = -6, y = 0.7 starts beyond it
+    quad(t, 1, 4, 5, 2);
+    const HandMesh h = hand_mesh(v, t);
+    Deposition dep(3, h.container, r);
+    const Grain& g = dep.place(drop_at(Vec3(-6.0, 0.7, 0) + h.shift, r));
+    const Vec3 expect = Vec3(0.0, 0.7, r / std::cos(a)) + h.shift;
+    EXPECT_LT((g.x - expect).norm(), 1e-5) << "lift " << lift << ": " << g.x.transpose() << " vs " << expect.transpose();
+    const CheckReport rep = check_packing(dep.grains(), 3, h.container);
+    EXPECT_TRUE(rep.ok()) << "lift " << lift << ": " << rep.overlaps << " overlaps, " << rep.unsupported
+                          << " unsupported, " << rep.outside << " outside";
+  }
+}
+
 TEST(MeshPlacement, SlidesOntoAGrainRollsOffItsTopAndRestsBesideItInTheGroove) {
   // The groove above; a first grain rests in it. A second, dropped upslope in the same plane y = 0.7,
   // slides straight down the face onto it (an exact slide), is then at the top of the circle where its
