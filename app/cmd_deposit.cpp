@@ -21,6 +21,7 @@
 #include "measures_json.h"
 #include "packing_meta.h"
 #include "progress.h"
+#include "scene_run_options.h"
 #include "validators.h"
 
 namespace btr_app {
@@ -28,11 +29,9 @@ namespace {
 
 using nlohmann::json;
 
-struct Options {
-  std::string scene, out, name;
-  std::uint64_t seed = 0;
+struct Options : SceneRunOptions {
   std::int64_t count = 0;
-  bool check = false, quiet = false, forces = false;
+  bool forces = false;
 };
 
 double seconds_since(std::chrono::steady_clock::time_point t) {
@@ -153,19 +152,18 @@ Runner add_deposit_command(CLI::App& app) {
       "and write OUTDIR/NAME.csv (id,x,y,z,radius,species), NAME.json (scene, seed, counts, timings,\n"
       "summary measures) and NAME.vtp (ParaView: apply a Glyph filter, sphere, scaled by 'radius').\n"
       "Exit codes: 0 ok, 2 bad input, 3 internal failure (placement or I/O), 4 --check failed.");
-  cmd->add_option("scene", o->scene, "scene file (TOML), e.g. inputs/bed3d.toml")->required()->check(CLI::ExistingFile);
-  cmd->add_option("-o,--out", o->out, "output folder, created if missing")->required();
-  cmd->add_option("--seed", o->seed, "random seed (default: the scene's [scene] seed)");
-  cmd->add_option("--count", o->count, "number of grains to place (default: the scene's grains.count)")
-      ->check(positive_integer());
-  cmd->add_flag("--check", o->check,
-                "self-check the packing (overlaps, unsupported grains, grains outside the container); "
-                "the files are still written, and the exit code is 4 if anything is wrong");
-  cmd->add_flag("-q,--quiet", o->quiet, "no progress bar and no summary; only errors");
+  add_scene_run_options(
+      cmd, *o, "scene file (TOML), e.g. inputs/bed3d.toml", "random seed (default: the scene's [scene] seed)",
+      [&] {
+        cmd->add_option("--count", o->count, "number of grains to place (default: the scene's grains.count)")
+            ->check(positive_integer());
+      },
+      "self-check the packing (overlaps, unsupported grains, grains outside the container); the files are still "
+      "written, and the exit code is 4 if anything is wrong",
+      "no progress bar and no summary; only errors");
   cmd->add_flag("--forces", o->forces,
                 "also write the static normal-force network: NAME.forces.csv (i,j,fx,fy,fz: force on grain i "
                 "from j; j = 0 the floor, j < 0 a wall) and NAME.forces.vtp (force chains, lines coloured by |f|)");
-  cmd->add_option("--name", o->name, "base name of the output files (default: the scene name)");
   return [o, cmd]() { return run_reporting_errors("deposit", [&] { return run(*o, *cmd); }); };
 }
 

@@ -24,6 +24,7 @@
 #include "coupling/io/scene_json.h"
 #include "progress.h"
 #include "series_files.h"
+#include "scene_run_options.h"
 #include "validators.h"
 
 namespace btr_app {
@@ -31,11 +32,8 @@ namespace {
 
 using nlohmann::json;
 
-struct Options {
-  std::string scene, out, name;
-  std::uint64_t seed = 0;
+struct Options : SceneRunOptions {
   std::int64_t steps = 0;
-  bool check = false, quiet = false;
   DrumDemOptions dem;  // --engine: the DEM drum
 };
 
@@ -123,16 +121,15 @@ Runner add_drum_command(CLI::App& app) {
       "then rotated by the engine at [drum].rpm or .froude (default Froude 5e-3) for --revolutions\n"
       "(OUTDIR/rotation/), with snapshots at the same angles and OUTDIR/drum_dem.json (docs/guide/drum_dem.md).\n"
       "Exit codes: 0 ok, 2 bad input, 3 internal failure (placement or I/O), 4 --check failed, 5 the engine failed.");
-  cmd->add_option("scene", o->scene, "scene file (TOML) with a drum container and a [drum] table")
-      ->required()
-      ->check(CLI::ExistingFile);
-  cmd->add_option("-o,--out", o->out, "output folder, created if missing")->required();
-  cmd->add_option("--seed", o->seed, "random seed of the fill (default: the scene's)");
-  cmd->add_option("--steps", o->steps, "number of steps (default: revolutions x steps_per_revolution)")
-      ->check(positive_integer());
-  cmd->add_flag("--check", o->check, "self-check every snapshot; exit code 4 if any fails (files are still written)");
-  cmd->add_flag("-q,--quiet", o->quiet, "no progress bar and no summary; only errors");
-  cmd->add_option("--name", o->name, "base name of the output files (default: the scene name)");
+  add_scene_run_options(
+      cmd, *o, "scene file (TOML) with a drum container and a [drum] table",
+      "random seed of the fill (default: the scene's)",
+      [&] {
+        cmd->add_option("--steps", o->steps, "number of steps (default: revolutions x steps_per_revolution)")
+            ->check(positive_integer());
+      },
+      "self-check every snapshot; exit code 4 if any fails (files are still written)",
+      "no progress bar and no summary; only errors");
   cmd->add_option("--engine", o->dem.engine, "liggghts | yade: rotate the drum in this DEM engine (default: dynamic BTR)")
       ->check(CLI::IsMember({"liggghts", "yade"}))
       ->excludes("--steps")

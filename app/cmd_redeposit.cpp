@@ -18,6 +18,7 @@
 #include "coupling/io/atomic_file.h"
 #include "coupling/io/scene_json.h"
 #include "series_files.h"
+#include "scene_run_options.h"
 #include "validators.h"
 
 namespace btr_app {
@@ -25,11 +26,8 @@ namespace {
 
 using nlohmann::json;
 
-struct Options {
-  std::string scene, out, name;
-  std::uint64_t seed = 0;
+struct Options : SceneRunOptions {
   std::int64_t cycles = -1;
-  bool check = false, quiet = false;
 };
 
 int run(const Options& o, const CLI::App& cmd) {
@@ -106,16 +104,15 @@ Runner add_redeposit_command(CLI::App& app) {
       "OUTDIR/NAME_cycles.csv (cycle, seconds, grains, clusters, mean_cluster_size, largest_cluster,\n"
       "mean_height_d: <h> by the strip method in mean diameters, packing_fraction) and OUTDIR/NAME_sizes.csv.\n"
       "Exit codes: 0 ok, 2 bad input, 3 internal failure (placement or I/O), 4 --check failed.");
-  cmd->add_option("scene", o->scene, "scene file (TOML) with a [clusters] table, e.g. inputs/nano_powder.toml")
-      ->required()
-      ->check(CLI::ExistingFile);
-  cmd->add_option("-o,--out", o->out, "output folder, created if missing")->required();
-  cmd->add_option("--seed", o->seed, "random seed (default: the scene's)");
-  cmd->add_option("--cycles", o->cycles, "number of redeposition cycles (default: [clusters].cycles)")
-      ->check(non_negative_integer());
-  cmd->add_flag("--check", o->check, "check every cycle's packing (overlaps, support of every cluster); exit 4 if any fails");
-  cmd->add_flag("-q,--quiet", o->quiet, "no per-cycle lines; only errors");
-  cmd->add_option("--name", o->name, "base name of the output files (default: the scene name)");
+  add_scene_run_options(
+      cmd, *o, "scene file (TOML) with a [clusters] table, e.g. inputs/nano_powder.toml",
+      "random seed (default: the scene's)",
+      [&] {
+        cmd->add_option("--cycles", o->cycles, "number of redeposition cycles (default: [clusters].cycles)")
+            ->check(non_negative_integer());
+      },
+      "check every cycle's packing (overlaps, support of every cluster); exit 4 if any fails",
+      "no per-cycle lines; only errors");
   return [o, cmd]() { return run_reporting_errors("redeposit", [&] { return run(*o, *cmd); }); };
 }
 

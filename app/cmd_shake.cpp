@@ -99,15 +99,14 @@ Runner add_shake_command(CLI::App& app) {
       "bed rests until its kinetic energy dies out; the same files, plus OUTDIR/shake_dem.json, OUTDIR/relax/ and\n"
       "OUTDIR/tap/ (the engine runs); seconds = the engine's processor time so far.\n"
       "Exit codes: 0 ok, 2 bad input, 3 internal failure (placement or I/O), 4 --check failed, 5 the engine failed.");
-  cmd->add_option("scene", o->scene, "scene file (TOML) with a [shaking] table, e.g. inputs/brazil_nut.toml")
-      ->required()
-      ->check(CLI::ExistingFile);
-  cmd->add_option("-o,--out", o->out, "output folder, created if missing")->required();
-  cmd->add_option("--seed", o->seed, "random seed for the deposition and the noise (default: the scene's)");
-  cmd->add_option("--cycles", o->cycles, "number of cycles (default: [shaking].cycles)")->check(positive_integer());
-  cmd->add_flag("--check", o->check, "self-check every snapshot; exit code 4 if any fails (files are still written)");
-  cmd->add_flag("-q,--quiet", o->quiet, "no progress bar and no summary; only errors");
-  cmd->add_option("--name", o->name, "base name of the output files (default: the scene name)");
+  add_scene_run_options(
+      cmd, *o, "scene file (TOML) with a [shaking] table, e.g. inputs/brazil_nut.toml",
+      "random seed for the deposition and the noise (default: the scene's)",
+      [&] {
+        cmd->add_option("--cycles", o->cycles, "number of cycles (default: [shaking].cycles)")->check(positive_integer());
+      },
+      "self-check every snapshot; exit code 4 if any fails (files are still written)",
+      "no progress bar and no summary; only errors");
   cmd->add_option("--engine", o->engine, "liggghts | yade: DEM tapping instead of dynamic BTR (default: dynamic BTR)")
       ->check(CLI::IsMember({"liggghts", "yade"}));
   cmd->add_option("--taps", o->taps, "--engine: number of taps (default: [shaking].cycles)")->check(positive_integer());

@@ -7,17 +7,16 @@
 
 #include "btr/scene/scene.h"
 #include "coupling/dem/tapping.h"
+#include "scene_run_options.h"
 
 namespace btr_app {
 
-struct ShakeOptions {
-  std::string scene, out, name, engine;
-  std::uint64_t seed = 0;
+struct ShakeOptions : SceneRunOptions {
+  std::string engine;
   std::int64_t cycles = 0, taps = 0;
   int np = 1;
   double time_limit = 3600.0;
   double rest_time = btr::kDefaultTapRestTime;  // s
-  bool check = false, quiet = false;
 };
 
 // Builds the scene's BTR packing (seed `seed`), relaxes it at rest in OUT/relax/, taps it in OUT/tap/ and writes
