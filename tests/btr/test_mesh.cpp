@@ -71,6 +71,20 @@ HandMesh floor_mesh() {
 
 }  // namespace
 
+// The rounding of the file's coordinates: half an ulp of a float32 is at most 2^-24 of the number, so the bound
+// is 2^-24 times the largest file coordinate (12.5 here), scaled; the shift the placement adds is not rounded.
+TEST(MeshIndex, VertexRoundoffIsHalfAFloatUlpOfTheLargestFileCoordinateScaled) {
+  TriangleMesh m;
+  m.scale = 1e-3;
+  m.shift = Vec3(0.5, -0.25, 2.0);
+  for (const Vec3& p : {Vec3(1.0, 2.0, 0.0), Vec3(-12.5, 3.0, 0.0), Vec3(4.0, 4.0, 7.0)}) m.vertices.push_back(m.scale * p + m.shift);
+  m.triangles = {{0, 1, 2}};
+  m.lo = m.vertices[0].cwiseMin(m.vertices[1]).cwiseMin(m.vertices[2]);
+  m.hi = m.vertices[0].cwiseMax(m.vertices[1]).cwiseMax(m.vertices[2]);
+  const MeshIndex idx(m, 1e-3);
+  EXPECT_NEAR(idx.vertex_roundoff(), std::ldexp(12.5e-3, -24), 1e-12 * std::ldexp(12.5e-3, -24));
+}
+
 TEST(MeshIndex, ClosestPointOfFaceEdgeAndVertex) {
   std::vector<Vec3> v = {{0, 0, 0}, {4, 0, 0}, {0, 4, 0}};
   TriangleMesh m;
