@@ -177,6 +177,7 @@ int Walker::slide_exact(Vec3& x, const Vec3& d) {
   // every such diagonal cost more than the exact moves around it.
   const double flat_tol = std::max(1e-9 * r, 4.0 * e.mesh.vertex_roundoff());
   int flat_next = -1;  // a neighbour in the plane of the face slid on that the path enters past its edge
+  Vec3 flat_normal;    // its unit normal towards the grain past the edge
   double tri_s = std::numeric_limits<double>::infinity();  // the first face met (its plane, inside it)
   std::vector<int>& tri_hits = face_hits;
   tri_hits.clear();
@@ -191,9 +192,8 @@ int Walker::slide_exact(Vec3& x, const Vec3& d) {
     if (n == 1 && facing && std::abs(std::abs(h) - r) <= flat_tol) {
       // In the same plane (up to flat_tol), on the grain's side: the centre keeps r from that plane, so from
       // t. The path goes on over t when it enters t's face past the edge.
-      Vec3 nn;
       double margin;
-      if (flat_next < 0 && face_contact(t, x0 + (s_exit + past) * g, nn, margin, flat_tol)) flat_next = t;
+      if (flat_next < 0 && face_contact(t, x0 + (s_exit + past) * g, flat_normal, margin, flat_tol)) flat_next = t;
       continue;
     }
     if (m.allFinite() && std::abs(h) > reach) {
@@ -228,10 +228,9 @@ int Walker::slide_exact(Vec3& x, const Vec3& d) {
     }
   if (over && segment_hits.empty()) {
     // Onto the neighbour's own plane (a move of at most flat_tol along its normal), unless a grain is that near.
-    const auto& f = e.mesh.mesh().triangles[static_cast<std::size_t>(flat_next)];
-    Vec3 m = (V[f[1]] - V[f[0]]).cross(V[f[2]] - V[f[0]]).normalized();
-    if (m.dot(x - V[f[0]]) < 0.0) m = -m;
-    const double lift = r - m.dot(x - V[f[0]]);
+    // x is the point face_contact judged (the slide went the whole s_exit + past).
+    const Vec3& m = flat_normal;
+    const double lift = r - m.dot(x - V[e.mesh.mesh().triangles[static_cast<std::size_t>(flat_next)][0]]);
     if (lift != 0.0) {
       const Vec3 way = lift > 0.0 ? m : Vec3(-m);
       first_grain_on_segment(e.grid, r, e.r_max, x, way, std::abs(lift), nullptr, 0, segment_hits);

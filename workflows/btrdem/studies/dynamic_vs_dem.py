@@ -161,6 +161,15 @@ class Study:
                              f"{Path(res['stderr']).read_text(errors='replace').strip()[-600:]}")
         return res
 
+    def _run_fresh(self, argv, d: Path, scene: dict, label: str) -> dict:
+        """Runs argv on d/scene.toml (written from `scene`) and marks the run finished; a stale mark goes first, so a
+        run stopped half-way is never reused."""
+        (d / FINISHED).unlink(missing_ok=True)
+        write_scene_toml(d / "scene.toml", scene)
+        res = self._run(argv, d, label)
+        mark_finished(d, scene, argv, res["cpu_seconds"])
+        return res
+
     def write(self):
         out_report.write_outputs(self)
 
@@ -189,10 +198,7 @@ class Study:
                 row.update(status="not run", reason=f"no finished run in runs/{case}/{tag} (--report-only)")
                 return
             else:
-                (d / FINISHED).unlink(missing_ok=True)
-                write_scene_toml(path, sc)
-                res = self._run(argv, d, f"btr drum {side}")
-                mark_finished(d, sc, argv, res["cpu_seconds"])
+                res = self._run_fresh(argv, d, sc, f"btr drum {side}")
             t = read_steps(d / "drum_steps.csv")
             row.update(drum_summary(t, int(sc["drum"]["steps_per_revolution"])))
             if side != "btr":  # the engine's processor time of the rotation alone (not the fill, not the settle)
@@ -273,10 +279,7 @@ class Study:
                             if self.reuse and finished_run(d, sc, argv) is not None:
                                 self.progress(f"  [mapping] reused the run finished in {d}")
                             else:
-                                (d / FINISHED).unlink(missing_ok=True)
-                                write_scene_toml(d / "scene.toml", sc)
-                                res = self._run(argv, d, "btr drum (mapping)")
-                                mark_finished(d, sc, argv, res["cpu_seconds"])
+                                self._run_fresh(argv, d, sc, "btr drum (mapping)")
                             row.update(drum_summary(read_steps(d / "drum_steps.csv"), spr))
 
     # ---- Brazil nut
