@@ -1,9 +1,9 @@
 // `btr settle SCENE.toml -o OUTDIR [--engine liggghts|yade] [--count N] [--seed N] [--np N]`: a DEM-ready packing
-// of a bed that stands for pouring the scene, without pouring it (docs/guide/settle.md): the BTR packing, a small
+// that stands for pouring the scene, without pouring it (docs/guide/settle.md). A bed: the BTR packing, a small
 // periodic calibration pour of the scene's grains whose bulk packing fraction becomes the target, and a DEM
-// relaxation of the BTR packing to that target (coupling/dem/settle_plan.h says what is chosen and why).
+// relaxation of the BTR packing to that target. A heap: the calibration is the scene poured with softened grains,
+// whose flank angle BTR then builds (settle_heap.h); coupling/dem/settle_plan.h says what is chosen and why.
 #include <algorithm>
-#include <chrono>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -20,6 +20,8 @@
 #include "measures_json.h"
 #include "packing_meta.h"
 #include "progress.h"
+#include "settle_heap.h"
+#include "settle_steps.h"
 #include "validators.h"
 
 namespace btr_app {
@@ -37,32 +39,6 @@ struct Options {
   bool quiet = false;
 };
 
-// One step's record in settle.json: processor time of btr itself (own_cpu_seconds' growth) plus that of the
-// engine it ran, and wall time.
-class StepClock {
- public:
-  StepClock() : cpu0_(own_cpu_seconds()), wall0_(std::chrono::steady_clock::now()) {}
-  json finish(const std::string& step, double engine_cpu_seconds, json details) const {
-    const double own = own_cpu_seconds() - cpu0_;
-    details["step"] = step;
-    details["btr_cpu_seconds"] = own;
-    details["engine_cpu_seconds"] = engine_cpu_seconds;
-    details["cpu_seconds"] = own + engine_cpu_seconds;
-    details["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count();
-    return details;
-  }
-
- private:
-  double cpu0_;
-  std::chrono::steady_clock::time_point wall0_;
-};
-
-// Simulated seconds the calibration pour may settle after its last batch, at least (a bed of ten largest diameters
-// comes to rest in a few tenths of a second).
-constexpr double kCalibrationSettleTime = 1.0;
-
-void say(const std::string& line) { std::cout << "btr settle: " << line << std::endl; }
-
 int run(const Options& o, const CLI::App& cmd) {
   const StepClock total;
   btr::Scene scene = btr::load_scene(o.scene);
@@ -74,14 +50,24 @@ int run(const Options& o, const CLI::App& cmd) {
   if (!o.engine.empty()) scene.relax.engine = o.engine;
   const std::string engine = scene.relax.engine;
   scene.relax.target_phi.reset();  // settle chooses the target; a scene's own is for `btr relax`
+  const bool heap = btr::settle_builds_heap(scene);
   const btr::CalibrationPlan cal = [&] {
     try {
       btr::check_settle_scene(scene);
-      return btr::calibration_plan(scene, o.calibration_grains);
+      if (heap && cmd.count("--calibration-grains"))
+        throw btr::RelaxRefused("--calibration-grains: a heap's calibration pours the scene's own grains (a smaller "
+                                "heap stands at another angle); it takes no grain count");
+      return heap ? btr::CalibrationPlan{} : btr::calibration_plan(scene, o.calibration_grains);
     } catch (const btr::RelaxRefused& e) {
       throw btr::SceneError(e.what());
     }
   }();
+  SettleRunOptions run_options;
+  run_options.seed = seed;
+  run_options.np = o.np;
+  run_options.time_limit = o.time_limit;
+  run_options.quiet = o.quiet;
+  const std::string of = heap ? "/4 " : "/3 ";
   const fs::path out(o.out);
   fs::create_directories(out);
   for (const char* stale : {".csv", ".json", ".vtp"}) fs::remove(out / (scene.name + stale));
@@ -89,7 +75,7 @@ int run(const Options& o, const CLI::App& cmd) {
   json steps = json::array();
 
   // ---- 1. the BTR packing
-  say("1/3 BTR deposit of " + std::to_string(count) + " grains");
+  say("1" + of + "BTR deposit of " + std::to_string(count) + " grains");
   btr::Packing btr_packing;
   {
     const StepClock clock;
@@ -106,30 +92,23 @@ int run(const Options& o, const CLI::App& cmd) {
     steps.push_back(clock.finish("deposit", 0.0, {{"what", "BTR deposition"}, {"output", "btr/" + scene.name + ".csv"}}));
   }
 
-  // ---- 2. the calibration pour: the target packing fraction
-  say("2/3 calibration pour of " + std::to_string(cal.grains) + " grains in a periodic cell " +
-      std::to_string(cal.width * 1e3) + " mm wide (" + engine + ")");
+  // ---- 2. (beds) the calibration pour: the target packing fraction; (heaps) the calibration and the BTR heap
   double target = 0.0;
   json target_from;
-  {
+  btr::Packing to_relax;
+  HeapSteps heap_steps;
+  if (heap) {
+    heap_steps = settle_heap(scene, engine, btr_packing.grains, run_options, out.string());
+    for (const json& step : heap_steps.steps) steps.push_back(step);
+    to_relax = heap_steps.heap;
+  } else {
+    say("2/3 calibration pour of " + std::to_string(cal.grains) + " grains in a periodic cell " +
+        std::to_string(cal.width * 1e3) + " mm wide (" + engine + ")");
     const StepClock clock;
-    const btr::Grains grains = btr::scene_drop_grains(cal.scene, seed);
-    btr::PourSettings settings;
-    settings.seed = seed;
-    settings.np = o.np;
-    settings.wall_time_limit = o.time_limit;
-    // At rest, not cut short by a max time chosen for the user's own relaxation.
-    settings.settle_max_time = std::max(scene.relax.max_time, kCalibrationSettleTime);
-    const fs::path dir = out / "calibration";
-    btr::PourResult r = btr::pour(grains, cal.scene, engine, settings, dir.string(),
-                                  scene_packing_meta(cal.scene, grains, seed, "settle calibration pour"));
     btr::MetricsOptions window;
     window.margin_diameters = btr::kCalibrationMargin;
-    const btr::PackingMeasures m = measure_in_scene(r.poured.grains, cal.scene, window);
-    r.poured.meta["measures"] = measures_to_json(m);
-    btr::write_packing_meta(dir.string(), "poured", r.poured.meta);
-    const json& pour_record = r.poured.meta["pour"];
-    btr::write_text_file((dir / "pour.json").string(), pour_record.dump(1) + "\n");
+    const CalibrationPour pour = calibration_pour(cal.scene, engine, run_options, (out / "calibration").string(), window);
+    const btr::PackingMeasures& m = pour.measures;
     if (!m.bulk.valid)
       throw btr::SceneError("--calibration-grains: the calibration pour's bulk window is empty (" + m.bulk.note +
                             "): its bed of " + std::to_string(cal.grains) + " grains is too shallow; give more");
@@ -143,19 +122,23 @@ int run(const Options& o, const CLI::App& cmd) {
                    {"bulk_grains", m.bulk.grains_in_window},
                    {"bulk_coordination", m.bulk.mean_coordination},
                    {"output", "calibration/poured.csv"}};
-    steps.push_back(clock.finish("calibration", pour_record.value("engine_cpu_seconds", r.run.cpu_seconds),
+    steps.push_back(clock.finish("calibration", pour.engine_cpu_seconds,
                                  {{"what", "periodic pour of the scene's grains and material"},
                                   {"grains", cal.grains},
                                   {"bulk_packing_fraction", target},
-                                  {"simulated_seconds", r.run.simulated_time},
-                                  {"stop_reason", r.run.stop_reason}}));
+                                  {"simulated_seconds", pour.result.run.simulated_time},
+                                  {"stop_reason", pour.result.run.stop_reason}}));
+    say("target bulk packing fraction " + std::to_string(target) + " (calibration pour)");
+    to_relax = btr_packing;
   }
-  say("target bulk packing fraction " + std::to_string(target) + " (calibration pour)");
 
   // ---- 3. the relaxation of the BTR packing to the target
-  say("3/3 " + engine + " relaxation of the BTR packing to the target");
-  const btr::SettleChoices choices = btr::settle_choices(
-      scene, target, target_from, btr::bed_depth_in_largest_diameters(btr_packing.grains, scene, target));
+  say(heap ? "4/4 " + engine + " quasi-static relaxation of the BTR heap"
+            : "3/3 " + engine + " relaxation of the BTR packing to the target");
+  const btr::SettleChoices choices =
+      heap ? btr::heap_settle_choices(scene, heap_steps.angle_deg, heap_steps.angle_from)
+           : btr::settle_choices(scene, target, target_from,
+                                 btr::bed_depth_in_largest_diameters(btr_packing.grains, scene, target));
   btr::Scene relax_scene = scene;
   relax_scene.relax.stop_rule = choices.stop_rule;
   btr::RelaxSettings settings = choices.settings;
@@ -165,12 +148,13 @@ int run(const Options& o, const CLI::App& cmd) {
   btr::PackingMeasures settled_measures;
   {
     const StepClock clock;
-    r = btr::relax(btr_packing, relax_scene, engine, settings, (out / "relax").string());
+    r = btr::relax(to_relax, relax_scene, engine, settings, (out / "relax").string());
     settled_measures = measure_in_scene(r.relaxed.grains, scene);
     r.relaxed.meta["measures"] = measures_to_json(settled_measures);
     btr::write_packing_meta((out / "relax").string(), "relaxed", r.relaxed.meta);
     steps.push_back(clock.finish("relax", r.cpu_seconds,
-                                 {{"what", "DEM relaxation of the BTR packing to the target"},
+                                 {{"what", heap ? "DEM quasi-static relaxation of the BTR heap"
+                                                : "DEM relaxation of the BTR packing to the target"},
                                   {"simulated_seconds", r.simulated_time},
                                   {"stop_reason", r.stop_reason},
                                   {"output", "relax/relaxed.csv"}}));
@@ -196,6 +180,9 @@ int run(const Options& o, const CLI::App& cmd) {
   }
   record["steps"] = steps;
   record["target_phi"] = reached;
+  if (heap)
+    record["angle_deg"] = {{"calibration", heap_steps.angle_deg},
+                           {"settled", settled_measures.heap.valid ? json(settled_measures.heap.angle_deg) : json()}};
   record["measures"] = settled.meta["measures"];
   const json all = total.finish("total", 0.0, json::object());
   double cpu = 0.0;
@@ -211,7 +198,7 @@ int run(const Options& o, const CLI::App& cmd) {
   say("processor time " + std::to_string(record["cpu_seconds"].get<double>()) + " s (calibration included), wall " +
       std::to_string(record["wall_seconds"].get<double>()) + " s");
   say("wrote " + o.out + "/" + scene.name + ".csv (.json, .vtp), settle.json, dem_input/, and each step's folder "
-      "(btr/, calibration/, relax/)");
+      "(btr/, calibration/, " + std::string(heap ? "btr_heap/, " : "") + "relax/)");
   if (reached.is_object() && reached.value("reached", true) == false) {
     std::cerr << "btr settle: the relaxation did not reach the target packing fraction " << target
               << " (settle.json, target_phi); the settled packing is written\n";
@@ -226,13 +213,16 @@ Runner add_settle_command(CLI::App& app) {
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
       "settle",
-      "A DEM-ready packing of a bed that stands for pouring the scene, without pouring it: the BTR packing,\n"
+      "A DEM-ready packing that stands for pouring the scene, without pouring it. A bed: the BTR packing,\n"
       "a small periodic calibration pour of the scene's grains and material in the same engine (its bulk\n"
-      "packing fraction is the target), then the BTR packing relaxed to that target. Writes OUTDIR/NAME.csv\n"
+      "packing fraction is the target), then the BTR packing relaxed to that target. A heap: the scene poured\n"
+      "with softened grains (its flank angle is the target), BTR's heap built at that angle, then a\n"
+      "quasi-static relaxation. Writes OUTDIR/NAME.csv\n"
       "(.json with the measures, .vtp), settle.json (every step's processor and wall time, the values chosen\n"
       "and where each came from), dem_input/ (the engine's ready-to-run input of the settled packing), and\n"
-      "the steps' folders btr/, calibration/, relax/. Serves beds (periodic, box, cylinder; rain); refuses\n"
-      "heaps, Hele-Shaw cells, drums and clusters with the reason.");
+      "the steps' folders btr/, calibration/, (heaps) btr_heap/, relax/. Serves beds (periodic, box, cylinder;\n"
+      "rain) and heaps (point sources; region sources in 2D and Hele-Shaw cells); refuses drums, meshes and\n"
+      "clusters with the reason.");
   cmd->footer(
       "Exit codes: 0 ok, 2 bad input or a scene settle does not serve, 5 an engine failed (its folder's "
       "relax_failure.json says how), 6 the target was not reached (the settled packing is written), 128+N stopped "
@@ -246,8 +236,8 @@ Runner add_settle_command(CLI::App& app) {
   cmd->add_option("--seed", o->seed, "seed of the drops, and of the calibration's (default: the scene's seed)");
   cmd->add_option("--np", o->np, "LIGGGHTS: MPI ranks (mpirun -np N); YADE: threads")->check(positive_integer());
   cmd->add_option("--calibration-grains", o->calibration_grains,
-                  "grains of the calibration pour (default: enough to fill its cell 10 largest diameters deep; "
-                  "fewer is cheaper and noisier)")
+                  "beds: grains of the calibration pour (default: enough to fill its cell 10 largest diameters "
+                  "deep; fewer is cheaper and noisier); heaps take none")
       ->check(positive_integer());
   cmd->add_option("--time-limit", o->time_limit, "wall-time limit of each engine run [s]")
       ->capture_default_str()

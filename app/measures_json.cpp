@@ -67,9 +67,15 @@ json stratification_json(const btr::Stratification& s) {
 
 btr::PackingMeasures measure_in_scene(const btr::Grains& grains, const btr::Scene& scene,
                                       const btr::MetricsOptions& options) {
-  const bool point = scene.source.kind == btr::SourceSpec::Kind::Point;
-  return btr::measure_packing(grains, scene.dimension, scene.container, options, point, scene.source.x,
-                              scene.source.y);
+  const btr::SourceSpec& s = scene.source;
+  if (s.kind == btr::SourceSpec::Kind::Point)
+    return btr::measure_packing(grains, scene.dimension, scene.container, options, true, s.x, s.y);
+  // A region source's heap is fitted by sides about the region's middle where the heap is a 2D pile (2D, and
+  // between a Hele-Shaw cell's plates); a 3D region's heap has no axis to fit about.
+  const bool by_sides = scene.dimension == 2 || scene.container.kind == btr::ContainerKind::HeleShaw;
+  const bool region_heap = s.kind == btr::SourceSpec::Kind::Region && by_sides;
+  return btr::measure_packing(grains, scene.dimension, scene.container, options, region_heap,
+                              0.5 * (s.x_min + s.x_max), 0.5 * (s.y_min + s.y_max));
 }
 
 json measures_to_json(const btr::PackingMeasures& m) {

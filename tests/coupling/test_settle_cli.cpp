@@ -1,13 +1,15 @@
 // `btr settle` as a user runs it: a tiny 2D bed settled for real in LIGGGHTS and in YADE (ids kept, the cost
 // record adds up, the target comes from the calibration and is reached, no overlap beyond the contact law's,
-// every grain above the floor, the engine's input of the settled packing written), and the refusals (exit 2,
-// naming the file and the field, nothing written).
+// every grain above the floor, the engine's input of the settled packing written); a tiny 2D heap settled in
+// both engines (the calibration is the scene softened, its angle the one chosen, the settled heap near it); and
+// the refusals (exit 2, naming the file and the field, nothing written).
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 
+#include "btr/measures/metrics.h"
 #include "cli_run.h"
 #include "coupling/dem/overlap.h"
 #include "coupling/dem/relax_target.h"
@@ -130,25 +132,96 @@ TEST_F(SettleCli, TinyBedInLiggghtsAndYade) {
   }
 }
 
-TEST_F(SettleCli, RefusalsNameTheFileAndTheFieldAndWriteNothing) {
-  auto replaced = [](std::string text, const std::string& from, const std::string& to) {
-    return text.replace(text.find(from), from.size(), to);
-  };
-  const std::string point_source = "kind = \"point\"\nposition = [0.0]";
-  const std::string heap = replaced(replaced(kTinyBed, "kind = \"periodic\"\nsize = [0.03]", "kind = \"open\""),
-                                    "kind = \"rain\"", point_source);
-  const std::string heap_path = scene_file("heap", heap);
-  CliRun r = btr("settle " + heap_path + " -o " + (dir_ / "r1").string());
-  EXPECT_EQ(r.code, 2) << r.out << r.err;
-  EXPECT_NE(r.err.find(heap_path), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("container.kind"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("btr pour"), std::string::npos) << r.err;  // says what to do instead
-  EXPECT_FALSE(fs::exists(dir_ / "r1" / "heap.csv"));
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  return text.replace(text.find(from), from.size(), to);
+}
 
-  const std::string point_path = scene_file("point", replaced(kTinyBed, "kind = \"rain\"", point_source));
-  r = btr("settle " + point_path + " -o " + (dir_ / "r2").string());
+// The tiny bed's disks poured from a point on an open floor, with rolling friction (free disks roll apart
+// into a layer one or two grains high): a heap about ten diameters high.
+std::string tiny_heap() {
+  return replaced(replaced(replaced(kTinyBed, "kind = \"periodic\"\nsize = [0.03]", "kind = \"open\""),
+                           "kind = \"rain\"", "kind = \"point\"\nposition = [0.0]\nscatter = 0.5e-3"),
+                  "friction = 0.5\n", "friction = 0.5\nrolling_friction = 0.2\n");
+}
+
+TEST_F(SettleCli, TinyHeapInLiggghtsAndYade) {
+  const std::string scene_path = scene_file("tiny_heap", tiny_heap());
+  for (const std::string engine : {"liggghts", "yade"}) {
+    SCOPED_TRACE(engine);
+    if (!btr_test::have_engine(engine)) {
+      ADD_FAILURE() << engine << " is not installed";
+      continue;
+    }
+    const fs::path out = dir_ / ("heap_" + engine);
+    const CliRun r = btr("settle " + scene_path + " -o " + out.string() + " --engine " + engine + " --quiet");
+    ASSERT_EQ(r.code, 0) << r.out << r.err;
+    const nlohmann::json rec = nlohmann::json::parse(slurp(out / "settle.json"));
+    const char* names[] = {"deposit", "calibration", "heap deposit", "relax", "engine input"};
+    ASSERT_EQ(rec["steps"].size(), 5u);
+    double steps_cpu = 0.0;
+    for (std::size_t k = 0; k < 5; ++k) {
+      EXPECT_EQ(rec["steps"][k]["step"], names[k]);
+      steps_cpu += rec["steps"][k]["cpu_seconds"].get<double>();
+    }
+    EXPECT_GT(rec["steps"][1]["engine_cpu_seconds"].get<double>(), 0.0);
+    EXPECT_GE(rec["cpu_seconds"].get<double>(), 0.999 * steps_cpu);
+
+    // The calibration is the scene itself, softer: its grains and container, every Young's modulus x the
+    // recorded softening, and the angle settle chose is that pour's own flank, fitted here.
+    const Packing cal = read_packing((out / "calibration" / "poured.csv").string());
+    const Scene cal_scene = scene_from_json(cal.meta["scene"], "poured.json");
+    const double softening = rec["chosen"]["angle_deg"]["from"]["softening"]["value"].get<double>();
+    EXPECT_GT(softening, 0.0);
+    EXPECT_LT(softening, 1.0);  // 5 MPa disks under ten layers overlap far less than the bound: softened
+    EXPECT_NEAR(cal_scene.grains.components[0].material.young, 5e6 * softening, 1e-6 * 5e6 * softening);
+    EXPECT_EQ(cal_scene.container.kind, ContainerKind::Open);
+    const HeapMeasures cal_heap = heap_measures(cal.grains, 2, 0.0, 0.0);
+    ASSERT_TRUE(cal_heap.valid) << cal_heap.note;
+    const double angle = rec["chosen"]["angle_deg"]["value"].get<double>();
+    EXPECT_DOUBLE_EQ(angle, cal_heap.angle_deg);
+    EXPECT_GT(angle, 5.0);
+    EXPECT_LT(angle, 45.0);  // a poured heap, far below the BTR heap's slope
+
+    // The settled heap: the BTR heap's grains (same radii in id order, none lost on this small floor), at the
+    // scene's own stiffness, standing near the calibrated angle, and far flatter than the plain BTR heap.
+    const Packing heap = read_packing((out / "btr_heap" / "tiny_heap.csv").string());
+    const Packing plain = read_packing((out / "btr" / "tiny_heap.csv").string());
+    const Packing settled = read_packing((out / "tiny_heap.csv").string());
+    ASSERT_EQ(settled.grains.size(), heap.grains.size());
+    for (std::size_t i = 0; i < settled.grains.size(); ++i) {
+      ASSERT_EQ(settled.grains[i].r, heap.grains[i].r) << "grain " << i + 1;
+      ASSERT_EQ(heap.grains[i].r, plain.grains[i].r) << "grain " << i + 1;
+    }
+    const Scene scene = scene_from_json(settled.meta["scene"], "tiny_heap.json");
+    EXPECT_LT(largest_overlap(settled.grains, 2, scene.container).largest, 0.01);
+    const HeapMeasures settled_heap = heap_measures(settled.grains, 2, 0.0, 0.0);
+    const HeapMeasures plain_heap = heap_measures(plain.grains, 2, 0.0, 0.0);
+    ASSERT_TRUE(settled_heap.valid) << settled_heap.note;
+    EXPECT_NEAR(settled_heap.angle_deg, angle, 6.0);
+    EXPECT_GT(plain_heap.angle_deg, settled_heap.angle_deg + 10.0);
+    EXPECT_NEAR(rec["angle_deg"]["settled"].get<double>(), settled_heap.angle_deg, 1e-9);
+    EXPECT_TRUE(fs::exists(out / "dem_input" / (engine == "liggghts" ? "in.btr" : "relax_yade.py")));
+  }
+}
+
+TEST_F(SettleCli, RefusalsNameTheFileAndTheFieldAndWriteNothing) {
+  // A 3D region source on an open floor: its heap has no axis for btr measure's angle.
+  const std::string region = replaced(replaced(replaced(kTinyBed, "dimension = 2", "dimension = 3"),
+                                               "kind = \"periodic\"\nsize = [0.03]", "kind = \"open\""),
+                                      "kind = \"rain\"", "kind = \"region\"\nx = [-1e-3, 1e-3]\ny = [-1e-3, 1e-3]");
+  const std::string region_path = scene_file("region", region);
+  CliRun r = btr("settle " + region_path + " -o " + (dir_ / "r1").string());
   EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find(region_path), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("source.kind"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("point source"), std::string::npos) << r.err;  // says what to do instead
+  EXPECT_FALSE(fs::exists(dir_ / "r1" / "region.csv"));
+
+  // A heap's calibration is the scene's own grains: no count to give.
+  r = btr("settle " + scene_file("heap", tiny_heap()) + " -o " + (dir_ / "r2").string() + " --calibration-grains 100");
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("--calibration-grains"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "r2" / "settle.json"));
 
   r = btr("settle " + scene_file("few", kTinyBed) + " -o " + (dir_ / "r3").string() + " --calibration-grains 10");
   EXPECT_EQ(r.code, 2) << r.out << r.err;

@@ -46,18 +46,39 @@ TEST(SettlePlan, ServesBedsInPeriodicBoxAndCylinderContainers) {
   }
 }
 
-TEST(SettlePlan, RefusesHeapsAndDynamicScenesNamingFileAndField) {
+TEST(SettlePlan, ServesHeapsFromPointSourcesAndRegionSourcesWhereTheirAngleIsMeasured) {
+  struct Case {
+    int dimension;
+    ContainerKind container;
+    SourceSpec::Kind source;
+  };
+  const Case served[] = {
+      {3, ContainerKind::Open, SourceSpec::Kind::Point},     {3, ContainerKind::HeleShaw, SourceSpec::Kind::Point},
+      {3, ContainerKind::Box, SourceSpec::Kind::Point},      {3, ContainerKind::Cylinder, SourceSpec::Kind::Point},
+      {3, ContainerKind::HeleShaw, SourceSpec::Kind::Region}, {2, ContainerKind::Open, SourceSpec::Kind::Region},
+      {2, ContainerKind::Box, SourceSpec::Kind::Point},
+  };
+  for (const Case& c : served) {
+    Scene s = bed(c.dimension);
+    s.container.kind = c.container;
+    s.source.kind = c.source;
+    EXPECT_EQ(refusal(s), "");
+    EXPECT_TRUE(settle_builds_heap(s));
+  }
+  EXPECT_FALSE(settle_builds_heap(bed(3)));
+}
+
+TEST(SettlePlan, RefusesWhatItCannotMeasureAndDynamicScenesNamingFileAndField) {
   struct Case {
     const char* field;
     void (*make)(Scene&);
   };
   const Case cases[] = {
-      {"container.kind", [](Scene& s) { s.container.kind = ContainerKind::Open; }},
-      {"container.kind", [](Scene& s) { s.container.kind = ContainerKind::HeleShaw; }},
+      {"source.kind", [](Scene& s) { s.container.kind = ContainerKind::HeleShaw; }},  // rain between plates
       {"container.kind", [](Scene& s) { s.container.kind = ContainerKind::Drum; }},
       {"container.kind", [](Scene& s) { s.container.kind = ContainerKind::Mesh; }},
-      {"source.kind", [](Scene& s) { s.source.kind = SourceSpec::Kind::Point; }},
-      {"source.kind", [](Scene& s) { s.source.kind = SourceSpec::Kind::Region; }},
+      {"source.kind", [](Scene& s) { s.source.kind = SourceSpec::Kind::List; }},
+      {"source.kind", [](Scene& s) { s.container.kind = ContainerKind::Open, s.source.kind = SourceSpec::Kind::Region; }},
       {"[clusters]", [](Scene& s) { s.clusters = ClustersSpec{}; }},
       {"[shaking]", [](Scene& s) { s.shaking = ShakingSpec{}; }},
       {"[intruder]", [](Scene& s) { s.intruder = IntruderSpec{}; }},
@@ -173,6 +194,66 @@ TEST(SettlePlan, ChoicesRecordTheTargetAndWhereEachValueCameFrom) {
   EXPECT_EQ(c.record["target_phi"]["from"]["source"], "calibration pour");
   s.relax.engine = "yade";
   EXPECT_EQ(settle_choices(s, 0.63, {}, 15.0).settings.compaction_damping, 0.5);
+}
+
+// Four grains on the floor, four stacked on them: the mean column is two weights. Hertz on the floor (R* = r,
+// 1/Y* = 2 (1 - nu^2) / E): F = 4/3 Y* sqrt(r) delta^3/2, so the softening s that gives delta = 0.04 r under
+// F = 2 m g is s = 3 F / (4 Y* sqrt(r) (0.04 r)^3/2).
+TEST(SettlePlan, HeapCalibrationSoftensTheSceneUntilTheColumnOverlapIsItsBound) {
+  Scene s = bed(3);
+  s.container.kind = ContainerKind::Open;
+  s.source.kind = SourceSpec::Kind::Point;
+  Material& m = s.grains.components[0].material;
+  m.young = 1e9, m.poisson = 0.3;
+  const double r = 1e-3, mass = s.grains.components[0].density * 4.0 / 3.0 * M_PI * r * r * r;
+  Grains heap;
+  for (int layer = 0; layer < 2; ++layer)
+    for (int k = 0; k < 4; ++k) heap.push_back(Grain{Vec3(4 * r * (k % 2), 4 * r * (k / 2), r + 2 * r * layer), r, 1});
+  const double y_star = m.young / (2.0 * (1.0 - 0.09)), force = 2.0 * mass * 9.81;
+  const double expected = 3.0 * force / (4.0 * y_star * std::sqrt(r) * std::pow(kHeapCalibrationColumnOverlap * r, 1.5));
+  const HeapCalibrationPlan plan = heap_calibration_plan(s, heap);
+  EXPECT_NEAR(plan.softening, expected, 1e-6 * expected);
+  EXPECT_NEAR(plan.scene.grains.components[0].material.young, expected * 1e9, 1e-6 * expected * 1e9);
+  EXPECT_NEAR(plan.column_overlap, kHeapCalibrationColumnOverlap, 1e-6);
+  EXPECT_NEAR(plan.column_overlap_scene, kHeapCalibrationColumnOverlap * std::pow(expected, 2.0 / 3.0), 1e-9);
+  EXPECT_TRUE(plan.record.contains("from"));
+  // Grains already softer than the bound are never stiffened.
+  m.young = 1e9 * expected * 0.5;
+  EXPECT_EQ(heap_calibration_plan(s, heap).softening, 1.0);
+}
+
+TEST(SettlePlan, HeapCalibrationOfALinearContactKeepsItsRestitution) {
+  Scene s = bed(3);
+  s.container.kind = ContainerKind::Open;
+  s.source.kind = SourceSpec::Kind::Point;
+  s.relax.model = "hooke-stiffness";
+  s.relax.timestep = 1e-6;
+  Material& m = s.grains.components[0].material;
+  m.kn = 1e5, m.kt = 2e4, m.gamma_n = 100.0, m.gamma_t = 50.0, m.wall_gamma_t = 40.0;
+  Grains heap;
+  for (int k = 0; k < 3; ++k) heap.push_back(Grain{Vec3(3e-3 * k, 0, 1e-3), 1e-3, 1});
+  const HeapCalibrationPlan plan = heap_calibration_plan(s, heap);
+  ASSERT_LT(plan.softening, 1.0);
+  const Material& soft = plan.scene.grains.components[0].material;
+  const double root = std::sqrt(plan.softening);
+  EXPECT_NEAR(soft.kn, 1e5 * plan.softening, 1e-9 * soft.kn);
+  EXPECT_NEAR(soft.kt, 2e4 * plan.softening, 1e-9 * soft.kt);
+  // gamma / sqrt(k / m) sets a linear contact's restitution: gamma scales as sqrt(k).
+  EXPECT_NEAR(soft.gamma_n, 100.0 * root, 1e-9 * 100.0);
+  EXPECT_NEAR(soft.gamma_t, 50.0 * root, 1e-9 * 50.0);
+  EXPECT_NEAR(soft.wall_gamma_t, 40.0 * root, 1e-9 * 40.0);
+  EXPECT_FALSE(plan.scene.relax.timestep.has_value());  // the softer contact's own, longer step
+  EXPECT_NEAR(plan.column_overlap, kHeapCalibrationColumnOverlap, 1e-6);  // F = kn delta: delta = m g / (s kn)
+}
+
+TEST(SettlePlan, HeapChoicesHoldTheShapeQuasiStatically) {
+  Scene s = bed(3);
+  const SettleChoices c = heap_settle_choices(s, 21.0, {{"source", "calibration pour"}});
+  EXPECT_FALSE(c.settings.target_phi.has_value());
+  EXPECT_EQ(c.settings.damping, 0.5);
+  EXPECT_EQ(c.stop_rule, "unbalanced-force");
+  EXPECT_EQ(c.record["angle_deg"]["value"], 21.0);
+  EXPECT_EQ(c.record["angle_deg"]["from"]["source"], "calibration pour");
 }
 
 }  // namespace

@@ -1,0 +1,88 @@
+#include "settle_heap.h"
+
+#include <cmath>
+#include <filesystem>
+
+#include "btr/placement/heap_surface.h"
+#include "btr/placement/run_scene.h"
+#include "btr/scene/scene_toml.h"
+#include "btr/model/number_text.h"
+#include "coupling/dem/settle_plan.h"
+#include "measures_json.h"
+#include "packing_meta.h"
+
+namespace btr_app {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+HeapSteps settle_heap(const btr::Scene& scene, const std::string& engine, const btr::Grains& btr_heap,
+                      const SettleRunOptions& o, const std::string& out) {
+  HeapSteps r;
+  r.steps = json::array();
+
+  // ---- 2. the calibration: the scene poured with softened grains
+  const btr::HeapCalibrationPlan cal = [&] {
+    try {
+      return btr::heap_calibration_plan(scene, btr_heap);
+    } catch (const btr::RelaxRefused& e) {
+      throw btr::SceneError(e.what());
+    }
+  }();
+  say("2/4 calibration pour of the scene's " + std::to_string(scene.grains.count) + " grains softened x " +
+      btr::g6(cal.softening) + " (" + engine + ")");
+  {
+    const StepClock clock;
+    const std::string dir = (fs::path(out) / "calibration").string();
+    const CalibrationPour pour = calibration_pour(cal.scene, engine, o, dir, btr::MetricsOptions{});
+    const btr::HeapMeasures& h = pour.measures.heap;
+    if (!h.valid)
+      throw btr::SceneError(scene.file + ": grains.count: the calibration pour of " +
+                            std::to_string(scene.grains.count) + " grains left no heap flank to fit (" + h.note +
+                            "): a heap needs more grains");
+    r.angle_deg = h.angle_deg;
+    r.angle_from = {{"source", "calibration pour"},
+                    {"softening", cal.record},
+                    {"grains", scene.grains.count},
+                    {"seed", o.seed},
+                    {"engine", engine},
+                    {"heap_height", h.height},
+                    {"output", "calibration/poured.csv"}};
+    r.steps.push_back(clock.finish("calibration", pour.engine_cpu_seconds,
+                                   {{"what", "pour of the scene with softened grains"},
+                                    {"grains", scene.grains.count},
+                                    {"softening", cal.softening},
+                                    {"angle_deg", h.angle_deg},
+                                    {"simulated_seconds", pour.result.run.simulated_time},
+                                    {"stop_reason", pour.result.run.stop_reason}}));
+  }
+  say("flank angle " + btr::g6(r.angle_deg) + " deg (calibration pour)");
+
+  // ---- 3. the BTR heap at that angle. Built once: the fitted angle of a heap of a few thousand grains scatters
+  // by a degree or two from one draw of the drops to the next, so correcting the surface by it would chase noise.
+  say("3/4 BTR heap at " + btr::g6(r.angle_deg) + " deg");
+  {
+    const StepClock clock;
+    const double phi = scene.dimension == 3 ? btr::kHeapSurfacePackingFraction3d : btr::kHeapSurfacePackingFraction2d;
+    btr::HeapSurface surface;
+    const std::vector<btr::Drop> drops =
+        btr::heap_surface_drops(scene, o.seed, scene.grains.count, r.angle_deg * M_PI / 180.0, phi, &surface);
+    r.heap.grains = btr::run_drops(scene, drops, nullptr).grains;
+    r.heap.meta = scene_packing_meta(scene, r.heap.grains, o.seed, "settle heap");
+    const btr::PackingMeasures built = measure_in_scene(r.heap.grains, scene);
+    r.heap.meta["measures"] = measures_to_json(built);
+    const std::string dir = (fs::path(out) / "btr_heap").string();
+    btr::write_packing(dir, scene.name, r.heap);
+    btr::write_packing_meta(dir, scene.name, r.heap.meta);
+    r.steps.push_back(clock.finish("heap deposit", 0.0,
+                                   {{"what", "BTR heap rained over the surface of the calibrated angle"},
+                                    {"surface_packing_fraction", phi},
+                                    {"apex_height", surface.apex_height},
+                                    {"built_angle_deg", built.heap.valid ? json(built.heap.angle_deg) : json()},
+                                    {"reach", surface.reach},
+                                    {"output", "btr_heap/" + scene.name + ".csv"}}));
+  }
+  return r;
+}
+
+}  // namespace btr_app
