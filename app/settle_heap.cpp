@@ -58,18 +58,34 @@ HeapSteps settle_heap(const btr::Scene& scene, const std::string& engine, const 
   }
   say("flank angle " + btr::g6(r.angle_deg) + " deg (calibration pour)");
 
-  // ---- 3. the BTR heap at that angle. Built once: the fitted angle of a heap of a few thousand grains scatters
-  // by a degree or two from one draw of the drops to the next, so correcting the surface by it would chase noise.
-  say("3/4 BTR heap at " + btr::g6(r.angle_deg) + " deg");
+  // ---- 3. the BTR heap at that angle: the fitted flank of a heap of a few thousand grains scatters by 0.4-2 deg
+  // from one draw of the drop positions to the next, with a bias of up to 1.3 deg (8 draws each of four scenes),
+  // so kHeapDraws heaps are built and the one whose flank is nearest the calibration's is kept.
+  say("3/4 BTR heap at " + btr::g6(r.angle_deg) + " deg (" + std::to_string(btr::kHeapDraws) + " draws)");
   {
     const StepClock clock;
     const double phi = scene.dimension == 3 ? btr::kHeapSurfacePackingFraction3d : btr::kHeapSurfacePackingFraction2d;
     btr::HeapSurface surface;
-    const std::vector<btr::Drop> drops =
-        btr::heap_surface_drops(scene, o.seed, scene.grains.count, r.angle_deg * M_PI / 180.0, phi, &surface);
-    r.heap.grains = btr::run_drops(scene, drops, nullptr).grains;
+    json draws = json::array();
+    double best = INFINITY;
+    btr::PackingMeasures built;
+    for (int draw = 0; draw < btr::kHeapDraws; ++draw) {
+      const std::vector<btr::Drop> drops = btr::heap_surface_drops(
+          scene, o.seed, scene.grains.count, r.angle_deg * M_PI / 180.0, phi, &surface, static_cast<std::uint64_t>(draw));
+      btr::Grains grains = btr::run_drops(scene, drops, nullptr).grains;
+      btr::PackingMeasures m = measure_in_scene(grains, scene);
+      draws.push_back(m.heap.valid ? json(m.heap.angle_deg) : json());
+      const double miss = m.heap.valid ? std::abs(m.heap.angle_deg - r.angle_deg) : INFINITY;
+      if (miss < best || r.heap.grains.empty()) {
+        best = miss;
+        r.heap.grains = std::move(grains);
+        built = std::move(m);
+      }
+    }
+    if (!built.heap.valid)
+      throw btr::SceneError(scene.file + ": grains.count: no BTR heap built at " + btr::g6(r.angle_deg) +
+                            " deg had a flank to fit (" + built.heap.note + ")");
     r.heap.meta = scene_packing_meta(scene, r.heap.grains, o.seed, "settle heap");
-    const btr::PackingMeasures built = measure_in_scene(r.heap.grains, scene);
     r.heap.meta["measures"] = measures_to_json(built);
     const std::string dir = (fs::path(out) / "btr_heap").string();
     btr::write_packing(dir, scene.name, r.heap);
@@ -79,6 +95,7 @@ HeapSteps settle_heap(const btr::Scene& scene, const std::string& engine, const 
                                     {"surface_packing_fraction", phi},
                                     {"apex_height", surface.apex_height},
                                     {"built_angle_deg", built.heap.valid ? json(built.heap.angle_deg) : json()},
+                                    {"draws_angle_deg", draws},
                                     {"reach", surface.reach},
                                     {"output", "btr_heap/" + scene.name + ".csv"}}));
   }

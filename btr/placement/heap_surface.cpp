@@ -17,7 +17,7 @@ namespace {
 constexpr long kMaxCellsPerAxis = 2048;
 // Draws per drop before a drop that finds no room inside the container is an error.
 constexpr int kTries = 100000;
-// Mixed into the seed: the positions' generator differs from the drops' own.
+// Mixed into the seed (times the draw + 1): the positions' generators differ from the drops' own and each other.
 constexpr std::uint64_t kPositionStream = 0x9e3779b97f4a7c15ULL;
 
 double unit(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
@@ -112,7 +112,7 @@ double distance_to_source(const Scene& scene, double x, double y) {
 }
 
 std::vector<Drop> heap_surface_drops(const Scene& scene, std::uint64_t seed, std::int64_t count, double angle,
-                                     double packing_fraction, HeapSurface* surface) {
+                                     double packing_fraction, HeapSurface* surface, std::uint64_t draw) {
   if (!(angle > 0.0 && angle < 0.5 * M_PI))
     throw std::invalid_argument("heap_surface_drops: the flank angle must lie in (0, 90) degrees, got " +
                                 std::to_string(angle * 180.0 / M_PI));
@@ -173,7 +173,7 @@ std::vector<Drop> heap_surface_drops(const Scene& scene, std::uint64_t seed, std
   // strata are visited in a random order, so the heap rises everywhere at once. Plain random positions would
   // leave the surface rough by the square root of each column's count, and a heap of a few thousand grains
   // would stand a degree or two off the angle asked.
-  std::mt19937_64 rng(seed ^ kPositionStream);
+  std::mt19937_64 rng(seed ^ (kPositionStream * (draw + 1)));
   const std::size_t n_drops = drops.size();
   std::vector<std::size_t> order(n_drops);
   for (std::size_t k = 0; k < n_drops; ++k) order[k] = k;

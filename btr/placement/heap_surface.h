@@ -31,11 +31,12 @@ double distance_to_source(const Scene& scene, double x, double y);
 
 // The `count` drops of the scene (radius, species and order as DropSequence draws them with `seed`), each
 // at a position drawn over the surface above with probability proportional to its height (positions from a
-// separate generator seeded with `seed`, so the same arguments give the same drops), inside the container
-// with one radius of clearance from its walls. `surface` (optional) receives the solved surface.
+// separate generator seeded with `seed` and `draw`, so the same arguments give the same drops and another
+// `draw` an independent set of positions), inside the container with one radius of clearance from its walls.
+// `surface` (optional) receives the solved surface.
 // Throws SceneError for a scene without a point or region source, and std::invalid_argument for an angle
 // outside (0, 90) degrees or a packing fraction outside (0, 1].
 std::vector<Drop> heap_surface_drops(const Scene& scene, std::uint64_t seed, std::int64_t count, double angle,
-                                     double packing_fraction, HeapSurface* surface = nullptr);
+                                     double packing_fraction, HeapSurface* surface = nullptr, std::uint64_t draw = 0);
 
 }  // namespace btr

@@ -37,8 +37,9 @@ inline constexpr std::int64_t kMinCalibrationGrains = 50;
 
 // Throws RelaxRefused, naming the scene file and field, for a scene `btr settle` does not serve. It serves beds
 // (a periodic, box or cylinder container filled by rain) and heaps (a point source in any of those, on an open
-// floor or in a Hele-Shaw cell; a region source where `btr measure` fits the heap by sides: 2D, Hele-Shaw) of
-// single grains; drums, shaking, intruders, clusters, meshes and list sources are refused with the reason.
+// floor or in a Hele-Shaw cell; a region source where `btr measure` fits the heap by sides: 2D, Hele-Shaw; Hertz
+// contacts only) of single grains; drums, shaking, intruders, clusters, meshes and list sources are refused with
+// the reason.
 void check_settle_scene(const Scene& scene);
 
 // Whether settle builds a heap (a point or region source) rather than a bed (rain).
@@ -96,23 +97,26 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
 // ---- heaps
 // A heap is judged by its flank angle, and the angle a pour leaves depends on the heap's size (a 500-grain pour of
 // docs/open_floor_heap's scene stood at 12-17 deg where its 2000-grain pours stand at 16-23), so a small
-// calibration pour cannot give it. The calibration is the scene itself, poured with every grain softened: the
-// angle of repose does not depend on the stiffness while the contacts' overlaps stay small, and a softer contact
-// allows a longer time step (the Rayleigh time grows as Young's modulus^-1/2). Measured on that scene (LIGGGHTS,
-// seeds 1 and 2, paired with its stiff pours at 16.4 and 23.4 deg): 25x softer (mean column overlap 1.5 % of the
-// radius) gave 20.3 and 22.7 deg, 100x softer (3.9 %) gave 18.7 and 19.0 deg for 0.23x the processor time.
-// So the scene is softened until the contact law's static overlap of a floor grain under the mean column of the
-// BTR heap (taller than the poured one, so the bound holds with room) reaches this share of its radius; never
-// stiffened.
+// calibration pour cannot give it. The calibration is the scene itself, poured with every grain softened: a Hertz
+// heap's angle does not depend on the stiffness while the contacts' overlaps stay small, and a softer contact
+// allows a longer time step (the Rayleigh time grows as Young's modulus^-1/2). Measured in LIGGGHTS (seed 1 and 2
+// of docs/open_floor_heap's scene, 16.4 and 23.4 deg stiff: 20.3 and 22.7 at 25x softer, a mean column overlap of
+// 1.5 % of the radius; 18.7 and 19.0 at 100x, 3.9 %, for 0.23x the processor time; a Hele-Shaw cell 5 d wide,
+// 25.3 deg stiff, 25.0 at 78x softer). Linear (Hooke) contacts do not keep their angle (the same cell: 20.6 deg
+// stiff, 19.0 at 0.3x): check_settle_scene refuses their heaps. So the scene is softened until the Hertz law's
+// static overlap of a floor grain under the mean column of the BTR heap (taller than the poured one, so the bound
+// holds with room) reaches this share of its radius; never stiffened.
 inline constexpr double kHeapCalibrationColumnOverlap = 0.04;
 // The BTR heap is built with its grains rained over the heap's surface at this packing fraction (BTR's own
 // bulk packing fraction of beds, 3D and 2D).
 inline constexpr double kHeapSurfacePackingFraction3d = 0.58;
 inline constexpr double kHeapSurfacePackingFraction2d = 0.80;
+// Independent draws of the drop positions built; the heap whose fitted flank is nearest the target is kept.
+inline constexpr int kHeapDraws = 8;
 
 struct HeapCalibrationPlan {
-  Scene scene;             // the scene with every stiffness scaled by `softening` (and no explicit time step)
-  double softening = 1.0;  // Young's moduli (hooke-stiffness: kn, kt) x this; damping kept at the same restitution
+  Scene scene;             // the scene with every Young's modulus x `softening` (and no explicit time step)
+  double softening = 1.0;
   double column_overlap_scene = 0.0;  // the mean column overlap / radius at the scene's stiffness
   double column_overlap = 0.0;        // ... and at the calibration's
   nlohmann::json record;   // settle.json "chosen": what was softened and why

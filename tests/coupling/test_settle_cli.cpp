@@ -13,6 +13,7 @@
 #include "cli_run.h"
 #include "coupling/dem/overlap.h"
 #include "coupling/dem/relax_target.h"
+#include "coupling/dem/settle_plan.h"
 #include "coupling/io/packing_io.h"
 #include "coupling/io/scene_json.h"
 #include "relax_fixtures.h"
@@ -182,6 +183,15 @@ TEST_F(SettleCli, TinyHeapInLiggghtsAndYade) {
     EXPECT_GT(angle, 5.0);
     EXPECT_LT(angle, 45.0);  // a poured heap, far below the BTR heap's slope
 
+    // The BTR heap kept is the draw whose flank is nearest the calibration's, and it is the one written.
+    const nlohmann::json& build = rec["steps"][2];
+    ASSERT_EQ(build["draws_angle_deg"].size(), static_cast<std::size_t>(kHeapDraws));
+    const double kept = build["built_angle_deg"].get<double>();
+    for (const nlohmann::json& a : build["draws_angle_deg"])
+      if (!a.is_null()) {
+        EXPECT_LE(std::abs(kept - angle), std::abs(a.get<double>() - angle) + 1e-12);
+      }
+
     // The settled heap: the BTR heap's grains (same radii in id order, none lost on this small floor), at the
     // scene's own stiffness, standing near the calibrated angle, and far flatter than the plain BTR heap.
     const Packing heap = read_packing((out / "btr_heap" / "tiny_heap.csv").string());
@@ -196,6 +206,7 @@ TEST_F(SettleCli, TinyHeapInLiggghtsAndYade) {
     EXPECT_LT(largest_overlap(settled.grains, 2, scene.container).largest, 0.01);
     const HeapMeasures settled_heap = heap_measures(settled.grains, 2, 0.0, 0.0);
     const HeapMeasures plain_heap = heap_measures(plain.grains, 2, 0.0, 0.0);
+    EXPECT_NEAR(heap_measures(heap.grains, 2, 0.0, 0.0).angle_deg, kept, 1e-9);
     ASSERT_TRUE(settled_heap.valid) << settled_heap.note;
     EXPECT_NEAR(settled_heap.angle_deg, angle, 6.0);
     EXPECT_GT(plain_heap.angle_deg, settled_heap.angle_deg + 10.0);

@@ -222,28 +222,19 @@ TEST(SettlePlan, HeapCalibrationSoftensTheSceneUntilTheColumnOverlapIsItsBound) 
   EXPECT_EQ(heap_calibration_plan(s, heap).softening, 1.0);
 }
 
-TEST(SettlePlan, HeapCalibrationOfALinearContactKeepsItsRestitution) {
-  Scene s = bed(3);
-  s.container.kind = ContainerKind::Open;
-  s.source.kind = SourceSpec::Kind::Point;
-  s.relax.model = "hooke-stiffness";
-  s.relax.timestep = 1e-6;
-  Material& m = s.grains.components[0].material;
-  m.kn = 1e5, m.kt = 2e4, m.gamma_n = 100.0, m.gamma_t = 50.0, m.wall_gamma_t = 40.0;
-  Grains heap;
-  for (int k = 0; k < 3; ++k) heap.push_back(Grain{Vec3(3e-3 * k, 0, 1e-3), 1e-3, 1});
-  const HeapCalibrationPlan plan = heap_calibration_plan(s, heap);
-  ASSERT_LT(plan.softening, 1.0);
-  const Material& soft = plan.scene.grains.components[0].material;
-  const double root = std::sqrt(plan.softening);
-  EXPECT_NEAR(soft.kn, 1e5 * plan.softening, 1e-9 * soft.kn);
-  EXPECT_NEAR(soft.kt, 2e4 * plan.softening, 1e-9 * soft.kt);
-  // gamma / sqrt(k / m) sets a linear contact's restitution: gamma scales as sqrt(k).
-  EXPECT_NEAR(soft.gamma_n, 100.0 * root, 1e-9 * 100.0);
-  EXPECT_NEAR(soft.gamma_t, 50.0 * root, 1e-9 * 50.0);
-  EXPECT_NEAR(soft.wall_gamma_t, 40.0 * root, 1e-9 * 40.0);
-  EXPECT_FALSE(plan.scene.relax.timestep.has_value());  // the softer contact's own, longer step
-  EXPECT_NEAR(plan.column_overlap, kHeapCalibrationColumnOverlap, 1e-6);  // F = kn delta: delta = m g / (s kn)
+TEST(SettlePlan, RefusesHeapsOfLinearContactsWhoseAngleFollowsTheStiffness) {
+  for (const char* model : {"hooke", "hooke-stiffness"}) {
+    Scene s = bed(3);
+    s.container.kind = ContainerKind::Open;
+    s.source.kind = SourceSpec::Kind::Point;
+    s.relax.model = model;
+    const std::string why = refusal(s);
+    EXPECT_NE(why.find("relax.model"), std::string::npos) << why;
+    EXPECT_NE(why.find("btr pour"), std::string::npos) << why;
+    s = bed(3);
+    s.relax.model = model;
+    EXPECT_EQ(refusal(s), "");  // a bed's calibration is not softened
+  }
 }
 
 TEST(SettlePlan, HeapChoicesHoldTheShapeQuasiStatically) {

@@ -44,6 +44,11 @@ def test_bed_sizes_by_hand(tmp_path):
     hs = settle_rows.row_scene(next(r for r in settle_rows.ROWS if r["name"] == "heap_hele_shaw_5d"), 500, 0.03)
     assert hs["container"]["gap"] == pytest.approx(5e-3)
     assert hs["source"]["y"] == pytest.approx([-2e-3, 2e-3])
+    # its Hertz twin differs in the contact model alone
+    hz = settle_rows.row_scene(next(r for r in settle_rows.ROWS if r["name"] == "heap_hele_shaw_5d_hertz"), 500, 0.03)
+    assert hs["relax"]["model"] == "hooke" and hz["relax"]["model"] == "hertz"
+    assert {k: v for k, v in hz.items() if k not in ("relax", "scene")} == \
+        {k: v for k, v in hs.items() if k not in ("relax", "scene")}
     friction = {r["name"]: settle_rows.row_scene(r, 100, 0.01)["material"] for r in settle_rows.ROWS if r["kind"] == "bed"}
     assert [friction[f"bed_mu{m}"]["friction"] for m in ("0.1", "0.3", "0.5", "0.8")] == [0.1, 0.3, 0.5, 0.8]
     assert friction["bed_mu0.5_rolling0.1"]["rolling_friction"] == 0.1

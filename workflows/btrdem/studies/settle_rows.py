@@ -46,6 +46,12 @@ ROWS = (
      "gap_d": 5},
     {"name": "heap_hele_shaw_15d", "label": "heap: Hele-Shaw cell, gap 15 d", "kind": "heap", "base": "hele-shaw",
      "gap_d": 15},
+    # The same cells with Hertz contacts: settle refuses linear (Hooke) contacts' heaps, whose angle follows the
+    # stiffness its softened calibration changes (coupling/dem/settle_plan.h).
+    {"name": "heap_hele_shaw_5d_hertz", "label": "heap: Hele-Shaw cell, gap 5 d, Hertz contacts", "kind": "heap",
+     "base": "hele-shaw", "gap_d": 5, "model": "hertz"},
+    {"name": "heap_hele_shaw_15d_hertz", "label": "heap: Hele-Shaw cell, gap 15 d, Hertz contacts", "kind": "heap",
+     "base": "hele-shaw", "gap_d": 15, "model": "hertz"},
 )
 # The optional YADE row: the base bed with fewer grains (--yade-count).
 YADE_ROW = {"name": "bed_mu0.5_yade", "label": "periodic bed, friction 0.5, YADE", "kind": "bed", "friction": 0.5,
@@ -105,6 +111,8 @@ def heap_scene(row: dict, count: int) -> dict:
         scene["container"]["gap"] = gap
         half = gap / 2.0 - r  # the pouring box spans the gap less one radius on each side, as in hele_shaw.toml
         scene["source"]["y"] = [-half, half]
+    if "model" in row:
+        scene["relax"]["model"] = row["model"]
     return scene
 
 
