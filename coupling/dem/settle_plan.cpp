@@ -53,7 +53,7 @@ void check_settle_scene(const Scene& scene) {
                "\"region\" over a 3D floor: btr measure fits a heap's angle about a point source (or by sides in 2D "
                "and Hele-Shaw cells), so a region source's heap has no angle to calibrate or check; use a point "
                "source");
-      return;
+      break;
     case SourceSpec::Kind::Point: break;
   }
   if (scene.relax.model != "hertz")

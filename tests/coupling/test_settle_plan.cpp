@@ -228,9 +228,13 @@ TEST(SettlePlan, RefusesHeapsOfLinearContactsWhoseAngleFollowsTheStiffness) {
     s.container.kind = ContainerKind::Open;
     s.source.kind = SourceSpec::Kind::Point;
     s.relax.model = model;
-    const std::string why = refusal(s);
+    std::string why = refusal(s);
     EXPECT_NE(why.find("relax.model"), std::string::npos) << why;
     EXPECT_NE(why.find("btr pour"), std::string::npos) << why;
+    s.container.kind = ContainerKind::HeleShaw;  // a region source between the plates, as inputs/hele_shaw.toml
+    s.source.kind = SourceSpec::Kind::Region;
+    why = refusal(s);
+    EXPECT_NE(why.find("relax.model"), std::string::npos) << why;
     s = bed(3);
     s.relax.model = model;
     EXPECT_EQ(refusal(s), "");  // a bed's calibration is not softened
