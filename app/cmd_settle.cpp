@@ -66,7 +66,6 @@ int run(const Options& o, const CLI::App& cmd) {
   run_options.seed = seed;
   run_options.np = o.np;
   run_options.time_limit = o.time_limit;
-  run_options.quiet = o.quiet;
   const std::string of = heap ? "/4 " : "/3 ";
   const fs::path out(o.out);
   fs::create_directories(out);

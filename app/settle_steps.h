@@ -36,11 +36,11 @@ class StepClock {
 
 inline void say(const std::string& line) { std::cout << "btr settle: " << line << std::endl; }
 
+// What every engine run of one settle takes from its command line.
 struct SettleRunOptions {
   std::uint64_t seed = 0;
   int np = 1;
   double time_limit = 7200.0;
-  bool quiet = false;
 };
 
 // Simulated seconds a calibration pour may settle after its last batch, at least (a bed of ten largest diameters
