@@ -174,7 +174,7 @@ def main(argv=None) -> int:
     st.add_argument("--n", type=int, help="grains of the 3D cases (default 3000; 2D: a third)")
 
     sm = sub.add_parser("settle-matrix", help="btr settle against 3 reference pours per row: beds (friction, rolling "
-                                              "friction, size ratio, cylinder) and heaps (refused for now)")
+                                              "friction, size ratio, cylinder) and heaps (angle; Hooke heaps are refused)")
     sm.add_argument("-o", "--out", required=True)
     sm.add_argument("--engine", choices=["liggghts", "yade"], default="liggghts")
     sm.add_argument("--count", type=int, default=3000, help="grains of a bed row (default 3000)")
