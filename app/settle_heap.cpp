@@ -65,14 +65,12 @@ HeapSteps settle_heap(const btr::Scene& scene, const std::string& engine, const 
   {
     const StepClock clock;
     const double phi = scene.dimension == 3 ? btr::kHeapSurfacePackingFraction3d : btr::kHeapSurfacePackingFraction2d;
-    btr::HeapSurface surface;
+    const btr::HeapSurfaceSampler sampler(scene, o.seed, scene.grains.count, r.angle_deg * M_PI / 180.0, phi);
     json draws = json::array();
     double best = INFINITY;
     btr::PackingMeasures built;
     for (int draw = 0; draw < btr::kHeapDraws; ++draw) {
-      const std::vector<btr::Drop> drops = btr::heap_surface_drops(
-          scene, o.seed, scene.grains.count, r.angle_deg * M_PI / 180.0, phi, &surface, static_cast<std::uint64_t>(draw));
-      btr::Grains grains = btr::run_drops(scene, drops, nullptr).grains;
+      btr::Grains grains = btr::run_drops(scene, sampler.draw(static_cast<std::uint64_t>(draw)), nullptr).grains;
       btr::PackingMeasures m = measure_in_scene(grains, scene);
       draws.push_back(m.heap.valid ? json(m.heap.angle_deg) : json());
       const double miss = m.heap.valid ? std::abs(m.heap.angle_deg - r.angle_deg) : INFINITY;
@@ -93,10 +91,10 @@ HeapSteps settle_heap(const btr::Scene& scene, const std::string& engine, const 
     r.steps.push_back(clock.finish("heap deposit", 0.0,
                                    {{"what", "BTR heap rained over the surface of the calibrated angle"},
                                     {"surface_packing_fraction", phi},
-                                    {"apex_height", surface.apex_height},
-                                    {"built_angle_deg", built.heap.valid ? json(built.heap.angle_deg) : json()},
+                                    {"apex_height", sampler.surface().apex_height},
+                                    {"built_angle_deg", built.heap.angle_deg},
                                     {"draws_angle_deg", draws},
-                                    {"reach", surface.reach},
+                                    {"reach", sampler.surface().reach},
                                     {"output", "btr_heap/" + scene.name + ".csv"}}));
   }
   return r;

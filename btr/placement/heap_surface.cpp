@@ -111,26 +111,26 @@ double distance_to_source(const Scene& scene, double x, double y) {
   }
 }
 
-std::vector<Drop> heap_surface_drops(const Scene& scene, std::uint64_t seed, std::int64_t count, double angle,
-                                     double packing_fraction, HeapSurface* surface, std::uint64_t draw) {
+HeapSurfaceSampler::HeapSurfaceSampler(const Scene& scene, std::uint64_t seed, std::int64_t count, double angle,
+                                       double packing_fraction)
+    : scene_(scene), seed_(seed) {
   if (!(angle > 0.0 && angle < 0.5 * M_PI))
-    throw std::invalid_argument("heap_surface_drops: the flank angle must lie in (0, 90) degrees, got " +
+    throw std::invalid_argument("HeapSurfaceSampler: the flank angle must lie in (0, 90) degrees, got " +
                                 std::to_string(angle * 180.0 / M_PI));
   if (!(packing_fraction > 0.0 && packing_fraction <= 1.0))
-    throw std::invalid_argument("heap_surface_drops: the packing fraction must lie in (0, 1], got " +
+    throw std::invalid_argument("HeapSurfaceSampler: the packing fraction must lie in (0, 1], got " +
                                 std::to_string(packing_fraction));
   distance_to_source(scene, 0.0, 0.0);  // refuses a source without a footprint
   const int dim = scene.dimension;
-  Scene s = scene;
-  s.grains.count = count;
-  DropSequence sequence(s, seed);
-  std::vector<Drop> drops(static_cast<std::size_t>(sequence.count()));
+  scene_.grains.count = count;
+  DropSequence sequence(scene_, seed);
+  drops_.resize(static_cast<std::size_t>(sequence.count()));
   double solid = 0.0;
-  for (Drop& d : drops) {
+  for (Drop& d : drops_) {
     d = sequence.next();
     solid += dim == 3 ? 4.0 / 3.0 * M_PI * d.r * d.r * d.r : M_PI * d.r * d.r;
   }
-  HeapSurface out;
+  HeapSurface& out = surface_;
   out.angle = angle;
   out.packing_fraction = packing_fraction;
   out.volume = solid / packing_fraction;
@@ -161,19 +161,27 @@ std::vector<Drop> heap_surface_drops(const Scene& scene, std::uint64_t seed, std
   out.apex_height = hi;
   out.reach = hi / slope;
 
-  std::vector<double> cumulative(grid.distance.size());
+  x0_ = grid.x0, y0_ = grid.y0, h_ = grid.h, nx_ = grid.nx;
+  cumulative_.resize(grid.distance.size());
   double sum = 0.0;
   for (std::size_t k = 0; k < grid.distance.size(); ++k) {
     const double d = grid.distance[k];
     if (!std::isnan(d)) sum += std::max(0.0, out.apex_height - slope * d);
-    cumulative[k] = sum;
+    cumulative_[k] = sum;
   }
+}
+
+std::vector<Drop> HeapSurfaceSampler::draw(std::uint64_t draw) const {
+  const int dim = scene_.dimension;
+  const Container& c = scene_.container;
+  const double sum = cumulative_.back();
+  std::vector<Drop> drops = drops_;
   // Stratified: drop n takes stratum order[n] of N equal shares of the surface's volume (in the grid's row-major
   // order, so each stretch of the floor receives its share to within one grain) and a uniform point in it; the
   // strata are visited in a random order, so the heap rises everywhere at once. Plain random positions would
   // leave the surface rough by the square root of each column's count, and a heap of a few thousand grains
   // would stand a degree or two off the angle asked.
-  std::mt19937_64 rng(seed ^ (kPositionStream * (draw + 1)));
+  std::mt19937_64 rng(seed_ ^ (kPositionStream * (draw + 1)));
   const std::size_t n_drops = drops.size();
   std::vector<std::size_t> order(n_drops);
   for (std::size_t k = 0; k < n_drops; ++k) order[k] = k;
@@ -181,29 +189,27 @@ std::vector<Drop> heap_surface_drops(const Scene& scene, std::uint64_t seed, std
     std::swap(order[k - 1], order[static_cast<std::size_t>(unit(rng) * static_cast<double>(k))]);
   for (std::size_t n = 0; n < n_drops; ++n) {
     Drop& d = drops[n];
-    int tries = 0;
-    for (;; ++tries) {
+    for (int tries = 0;; ++tries) {
       if (tries == kTries)
-        throw SceneError(scene_name(scene) + ": the heap's surface leaves no room for grain " + std::to_string(n + 1) +
+        throw SceneError(scene_name(scene_) + ": the heap's surface leaves no room for grain " + std::to_string(n + 1) +
                          " (radius " + std::to_string(d.r) + " m) inside the container");
       // A grain that does not fit in its stratum (against a wall) is drawn anywhere after a few tries.
       const double share = tries < 16 ? (static_cast<double>(order[n]) + unit(rng)) / static_cast<double>(n_drops)
                                       : unit(rng);
-      const double u = share * sum;
       const std::size_t k = static_cast<std::size_t>(
-          std::min<std::ptrdiff_t>(std::upper_bound(cumulative.begin(), cumulative.end(), u) - cumulative.begin(),
-                                   static_cast<std::ptrdiff_t>(cumulative.size()) - 1));
-      const long i = static_cast<long>(k) % grid.nx, j = static_cast<long>(k) / grid.nx;
-      double x = grid.x0 + (i + unit(rng)) * grid.h;
-      double y = dim == 3 ? grid.y0 + (j + unit(rng)) * grid.h : 0.0;
-      if (!fits(scene.container, dim, x, y, d.r)) continue;
-      if (wraps_x(scene.container)) x = wrap_coordinate(x, scene.container.size_x);
-      if (wraps_y(scene.container, dim)) y = wrap_coordinate(y, scene.container.size_y);
+          std::min<std::ptrdiff_t>(std::upper_bound(cumulative_.begin(), cumulative_.end(), share * sum) -
+                                       cumulative_.begin(),
+                                   static_cast<std::ptrdiff_t>(cumulative_.size()) - 1));
+      const long i = static_cast<long>(k) % nx_, j = static_cast<long>(k) / nx_;
+      double x = x0_ + (i + unit(rng)) * h_;
+      double y = dim == 3 ? y0_ + (j + unit(rng)) * h_ : 0.0;
+      if (!fits(c, dim, x, y, d.r)) continue;
+      if (wraps_x(c)) x = wrap_coordinate(x, c.size_x);
+      if (wraps_y(c, dim)) y = wrap_coordinate(y, c.size_y);
       d.x = x, d.y = y;
       break;
     }
   }
-  if (surface) *surface = out;
   return drops;
 }
 

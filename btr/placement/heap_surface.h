@@ -29,14 +29,29 @@ struct HeapSurface {
 // nearest image. Throws SceneError for a rain or list source (no footprint to build a heap around).
 double distance_to_source(const Scene& scene, double x, double y);
 
-// The `count` drops of the scene (radius, species and order as DropSequence draws them with `seed`), each
-// at a position drawn over the surface above with probability proportional to its height (positions from a
-// separate generator seeded with `seed` and `draw`, so the same arguments give the same drops and another
-// `draw` an independent set of positions), inside the container with one radius of clearance from its walls.
-// `surface` (optional) receives the solved surface.
-// Throws SceneError for a scene without a point or region source, and std::invalid_argument for an angle
-// outside (0, 90) degrees or a packing fraction outside (0, 1].
-std::vector<Drop> heap_surface_drops(const Scene& scene, std::uint64_t seed, std::int64_t count, double angle,
-                                     double packing_fraction, HeapSurface* surface = nullptr, std::uint64_t draw = 0);
+// The surface above for the `count` drops of the scene (radius, species and order as DropSequence draws them
+// with `seed`), solved once; draw(k) gives the drops at positions drawn over it with probability proportional
+// to its height, inside the container with one radius of clearance from its walls. Positions come from a
+// generator seeded with `seed` and k: the same k gives the same drops, another k an independent set.
+// The constructor throws SceneError for a scene without a point or region source, and std::invalid_argument
+// for an angle outside (0, 90) degrees or a packing fraction outside (0, 1].
+class HeapSurfaceSampler {
+ public:
+  HeapSurfaceSampler(const Scene& scene, std::uint64_t seed, std::int64_t count, double angle,
+                     double packing_fraction);
+  const HeapSurface& surface() const { return surface_; }
+  std::vector<Drop> draw(std::uint64_t k) const;
+
+ private:
+  Scene scene_;
+  std::uint64_t seed_;
+  HeapSurface surface_;
+  std::vector<Drop> drops_;  // radii and species in order; positions filled by draw()
+  // The sampling grid: cells of side h from (x0, y0), nx per row, ny rows (2D: one), row-major; the running sum
+  // of the surface's height over the cells (flat where a cell lies outside the container or beyond the foot).
+  double x0_ = 0.0, y0_ = 0.0, h_ = 0.0;
+  long nx_ = 1;
+  std::vector<double> cumulative_;
+};
 
 }  // namespace btr

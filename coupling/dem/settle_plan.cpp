@@ -19,6 +19,13 @@ Scene softened(const Scene& scene, double s) {
   return out;
 }
 
+// settle.json's record of the quasi-static settle's stop rule, beds and heaps alike.
+nlohmann::json stop_rule_record(const Scene& scene, const std::string& rule) {
+  return {{"value", rule},
+          {"from", "btr settle: unbalanced force below the scene's relax.stop_unbalanced_force (" +
+                       g6(scene.relax.stop_unbalanced_force) + ")"}};
+}
+
 }  // namespace
 
 bool settle_builds_heap(const Scene& scene) {
@@ -150,10 +157,7 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
         {"from", "the calibration's bulk window: largest diameters from the floor, walls and surface"}}},
       {"friction_scales", {{"value", scene.relax.friction_scales}, {"from", "the scene's relax.friction_scales"}}},
       {"damping", {{"value", c.damping}, {"from", "btr settle: quasi-static settle after the compaction"}}},
-      {"stop_rule",
-       {{"value", c.stop_rule},
-        {"from", "btr settle: unbalanced force below the scene's relax.stop_unbalanced_force (" +
-                     g6(scene.relax.stop_unbalanced_force) + ")"}}},
+      {"stop_rule", stop_rule_record(scene, c.stop_rule)},
   };
   return c;
 }
@@ -163,20 +167,10 @@ HeapCalibrationPlan heap_calibration_plan(const Scene& scene, const Grains& btr_
   HeapCalibrationPlan plan;
   auto overlap = [&](double s) { return predict_static_overlap(btr_heap, softened(scene, s)).column.mean_relative; };
   plan.column_overlap_scene = overlap(1.0);
-  double s = 1.0;
-  if (plan.column_overlap_scene < kHeapCalibrationColumnOverlap) {
-    // The overlap falls as the stiffness grows (Hertz: as s^-2/3): bisect log s.
-    double lo = std::log(1e-8), hi = 0.0;
-    if (overlap(std::exp(lo)) < kHeapCalibrationColumnOverlap) {
-      s = std::exp(lo);
-    } else {
-      for (int k = 0; k < 60; ++k) {
-        const double mid = 0.5 * (lo + hi);
-        (overlap(std::exp(mid)) > kHeapCalibrationColumnOverlap ? lo : hi) = mid;
-      }
-      s = std::exp(hi);
-    }
-  }
+  if (!(plan.column_overlap_scene > 0.0))
+    throw RelaxRefused("heap calibration: the BTR heap puts no load on the floor");
+  // Hertz overlap under a given force goes as Young's modulus^-2/3 (heaps are Hertz only: check_settle_scene).
+  const double s = std::min(1.0, std::pow(plan.column_overlap_scene / kHeapCalibrationColumnOverlap, 1.5));
   plan.softening = s;
   plan.scene = softened(scene, s);
   plan.scene.name = scene.name + "_calibration";
@@ -199,10 +193,7 @@ SettleChoices heap_settle_choices(const Scene& scene, double angle_deg, const nl
   c.record = {
       {"angle_deg", {{"value", angle_deg}, {"from", angle_from}}},
       {"damping", {{"value", c.damping}, {"from", "btr settle: a quasi-static settle that holds the heap's shape"}}},
-      {"stop_rule",
-       {{"value", c.stop_rule},
-        {"from", "btr settle: unbalanced force below the scene's relax.stop_unbalanced_force (" +
-                     g6(scene.relax.stop_unbalanced_force) + ")"}}},
+      {"stop_rule", stop_rule_record(scene, c.stop_rule)},
   };
   return c;
 }

@@ -39,8 +39,9 @@ double solid(const std::vector<Drop>& drops, int dim) {
 
 TEST(HeapSurface, ConeOnAnOpenFloorHasTheApexOfItsVolume) {
   const Scene s = heap(3, 2000, 0.5e-3);
-  HeapSurface h;
-  const auto drops = heap_surface_drops(s, 1, 2000, 25.0 * kDeg, 0.6, &h);
+  const HeapSurfaceSampler sampler(s, 1, 2000, 25.0 * kDeg, 0.6);
+  const HeapSurface& h = sampler.surface();
+  const auto drops = sampler.draw(0);
   const double v = solid(drops, 3) / 0.6, t = std::tan(25.0 * kDeg);
   EXPECT_NEAR(h.volume, v, 1e-12 * v);
   // V = pi/3 H^3 / tan^2: the grid's cells (a quarter radius) sample it to well within 1 %.
@@ -51,8 +52,9 @@ TEST(HeapSurface, ConeOnAnOpenFloorHasTheApexOfItsVolume) {
 TEST(HeapSurface, TriangleIn2dAndRampAgainstAHeleShawEndWall) {
   {
     const Scene s = heap(2, 500, 0.5e-3);
-    HeapSurface h;
-    const auto drops = heap_surface_drops(s, 1, 500, 30.0 * kDeg, 0.8, &h);
+    const HeapSurfaceSampler sampler(s, 1, 500, 30.0 * kDeg, 0.8);
+    const HeapSurface& h = sampler.surface();
+    const auto drops = sampler.draw(0);
     const double v = solid(drops, 2) / 0.8;
     EXPECT_NEAR(h.apex_height, std::sqrt(v * std::tan(30.0 * kDeg)), 0.01 * h.apex_height);  // V = H^2 / tan
   }
@@ -63,8 +65,9 @@ TEST(HeapSurface, TriangleIn2dAndRampAgainstAHeleShawEndWall) {
   s.source.kind = SourceSpec::Kind::Region;
   s.source.x_min = -0.0495, s.source.x_max = -0.045;
   s.source.y_min = -2e-3, s.source.y_max = 2e-3;
-  HeapSurface h;
-  const auto drops = heap_surface_drops(s, 1, 3000, 20.0 * kDeg, 0.6, &h);
+  const HeapSurfaceSampler sampler(s, 1, 3000, 20.0 * kDeg, 0.6);
+  const HeapSurface& h = sampler.surface();
+  const auto drops = sampler.draw(0);
   // A plateau from the wall (x = -0.05) to the source's far edge, then the ramp: V / w = H a + H^2 / (2 tan).
   const double t = std::tan(20.0 * kDeg), a = 0.005, area = solid(drops, 3) / 0.6 / 5e-3;
   const double expected = (-a + std::sqrt(a * a + 2.0 * area / t)) * t;
@@ -80,8 +83,9 @@ TEST(HeapSurface, DropsKeepTheSceneRadiiAndSpreadAsTheConesVolume) {
   Scene s = heap(3, 20000, 0.5e-3);
   s.grains.components[0].radius.kind = RadiusSpec::Kind::Uniform;
   s.grains.components[0].radius.min = 0.4e-3, s.grains.components[0].radius.max = 0.6e-3;
-  HeapSurface h;
-  const auto drops = heap_surface_drops(s, 3, 20000, 30.0 * kDeg, 0.6, &h);
+  const HeapSurfaceSampler sampler(s, 3, 20000, 30.0 * kDeg, 0.6);
+  const HeapSurface& h = sampler.surface();
+  const auto drops = sampler.draw(0);
   DropSequence sequence(s, 3);
   std::int64_t inner = 0;
   for (const Drop& d : drops) {
@@ -98,9 +102,9 @@ TEST(HeapSurface, SameArgumentsSameDropsAndPeriodicCellsWrap) {
   Scene s = heap(3, 400, 0.5e-3);
   s.container.kind = ContainerKind::Periodic;
   s.container.size_x = s.container.size_y = 0.012;  // narrower than the heap: its flanks wrap
-  const auto a = heap_surface_drops(s, 5, 400, 20.0 * kDeg, 0.6);
-  const auto b = heap_surface_drops(s, 5, 400, 20.0 * kDeg, 0.6);
-  const auto c = heap_surface_drops(s, 6, 400, 20.0 * kDeg, 0.6);
+  const auto a = HeapSurfaceSampler(s, 5, 400, 20.0 * kDeg, 0.6).draw(0);
+  const auto b = HeapSurfaceSampler(s, 5, 400, 20.0 * kDeg, 0.6).draw(0);
+  const auto c = HeapSurfaceSampler(s, 6, 400, 20.0 * kDeg, 0.6).draw(0);
   bool differs = false;
   for (std::size_t i = 0; i < a.size(); ++i) {
     ASSERT_EQ(a[i].x, b[i].x);
@@ -112,6 +116,16 @@ TEST(HeapSurface, SameArgumentsSameDropsAndPeriodicCellsWrap) {
     differs = differs || a[i].x != c[i].x;
   }
   EXPECT_TRUE(differs);
+  // Another draw of the same surface: the same grains, other positions.
+  const HeapSurfaceSampler sampler(s, 5, 400, 20.0 * kDeg, 0.6);
+  const auto d0 = sampler.draw(0), d1 = sampler.draw(1);
+  std::size_t moved = 0;
+  for (std::size_t i = 0; i < d0.size(); ++i) {
+    ASSERT_EQ(d0[i].r, d1[i].r);
+    ASSERT_EQ(d0[i].x, a[i].x);
+    moved += d0[i].x != d1[i].x;
+  }
+  EXPECT_GT(moved, d0.size() / 2);
   // The nearest image: a point just across the cell's edge is close to a source near the other edge.
   s.source.x = 0.0055;
   EXPECT_NEAR(distance_to_source(s, -0.0055, 0.0), 0.001, 1e-12);
@@ -122,11 +136,11 @@ TEST(HeapSurface, RefusesASourceWithoutAFootprintAndAnglesOutOfRange) {
   s.source.kind = SourceSpec::Kind::Rain;
   s.container.kind = ContainerKind::Box;
   s.container.size_x = s.container.size_y = 0.01;
-  EXPECT_THROW(heap_surface_drops(s, 1, 10, 20.0 * kDeg, 0.6), SceneError);
+  EXPECT_THROW(HeapSurfaceSampler(s, 1, 10, 20.0 * kDeg, 0.6), SceneError);
   s = heap(3, 10, 0.5e-3);
-  EXPECT_THROW(heap_surface_drops(s, 1, 10, 0.0, 0.6), std::invalid_argument);
-  EXPECT_THROW(heap_surface_drops(s, 1, 10, 90.0 * kDeg, 0.6), std::invalid_argument);
-  EXPECT_THROW(heap_surface_drops(s, 1, 10, 20.0 * kDeg, 0.0), std::invalid_argument);
+  EXPECT_THROW(HeapSurfaceSampler(s, 1, 10, 0.0, 0.6), std::invalid_argument);
+  EXPECT_THROW(HeapSurfaceSampler(s, 1, 10, 90.0 * kDeg, 0.6), std::invalid_argument);
+  EXPECT_THROW(HeapSurfaceSampler(s, 1, 10, 20.0 * kDeg, 0.0), std::invalid_argument);
 }
 
 // The premise of settle's heaps: BTR keeps a surface whose slope is below its own limit (a point-source BTR
@@ -134,7 +148,7 @@ TEST(HeapSurface, RefusesASourceWithoutAFootprintAndAnglesOutOfRange) {
 TEST(HeapSurface, ABtrHeapRainedOverTheSurfaceKeepsItsAngle) {
   const Scene s = heap(3, 3000, 0.5e-3);
   for (double angle : {15.0, 30.0}) {
-    const auto drops = heap_surface_drops(s, 2, 3000, angle * kDeg, 0.58);
+    const auto drops = HeapSurfaceSampler(s, 2, 3000, angle * kDeg, 0.58).draw(0);
     const Grains grains = run_drops(s, drops, nullptr).grains;
     const HeapMeasures m = heap_measures(grains, 3, 0.0, 0.0);
     ASSERT_TRUE(m.valid) << m.note;
