@@ -77,6 +77,8 @@ struct RelaxSpec {
   double damping = 0.0;             // YADE's NewtonIntegrator damping (local, non-viscous), in [0, 1); 0 = off
   double open_margin = 10.0;        // open container: grains farther than this many largest diameters
                                     // beyond the packing's footprint are removed (and counted)
+  double open_heap_angle = 2.0;     // open container: the region also holds the grains' volume as a heap at
+                                    // this angle [deg] (coupling/dem/open_floor_region.h)
   // Land on this bulk packing fraction (coupling/dem/relax_target.h): in the same run, before the stop rule,
   // friction is scaled by friction_scales[0] (then the next scale if the bed comes to rest below the target)
   // with damping compaction_damping, until the bulk packing fraction reaches target_phi; then the friction is

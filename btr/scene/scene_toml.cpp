@@ -240,8 +240,8 @@ class SceneParser {
     auto s = rd_.table(root_, "relax", "[relax]");
     if (!s) return;
     rd_.check_keys(*s, {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep", "stop_rule",
-                        "stop_unbalanced_force", "stop_displacement", "damping", "open_margin", "preload",
-                        "target_phi", "friction_scales", "compaction_damping", "compaction_timestep_fraction"});
+                        "stop_unbalanced_force", "stop_displacement", "damping", "open_margin", "open_heap_angle",
+                        "preload", "target_phi", "friction_scales", "compaction_damping", "compaction_timestep_fraction"});
     RelaxSpec& r = scene_.relax;
     r.engine = rd_.choice(*s, "engine", {"liggghts", "yade"}).value_or(r.engine);
     r.model = rd_.choice(*s, "model", {"hertz", "hooke", "hooke-stiffness"}).value_or(r.model);
@@ -263,6 +263,8 @@ class SceneParser {
                               "a damping coefficient in [0, 1) (YADE's NewtonIntegrator damping; 0 = off)");
     r.open_margin = rd_.number_or(*s, "open_margin", r.open_margin, positive,
                                   "a positive number of largest grain diameters");
+    r.open_heap_angle = rd_.number_or(*s, "open_heap_angle", r.open_heap_angle,
+                                      [](double v) { return v > 0.0 && v < 90.0; }, "an angle in (0, 90) degrees");
     if (auto t = rd_.number(*s, "target_phi", [](double v) { return v > 0.0 && v < 1.0; },
                             "a target bulk packing fraction in (0, 1)"))
       r.target_phi = *t;

@@ -91,8 +91,9 @@ nlohmann::json pour_record(const PourLattice& lattice, const Scene& pour, const 
                     {"ids", run.removed},
                     {"region", {{"x", {plan.region_lo[0], plan.region_hi[0]}}, {"y", {plan.region_lo[1], plan.region_hi[1]}}}},
                     {"rule", "open floor: grains whose centre left the region (the lattice's footprint, and the "
-                             "poured packing's, grown by relax.open_margin largest diameters) were removed; ids are "
-                             "the input's, the others are renumbered"}};
+                             "poured packing's, grown by relax.open_margin largest diameters, and at least the heap "
+                             "of the grains at relax.open_heap_angle) were removed; ids are the input's, the others "
+                             "are renumbered"}};
   return r;
 }
 

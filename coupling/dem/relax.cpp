@@ -15,6 +15,7 @@
 #include "coupling/dem/dem_walls.h"
 #include "coupling/dem/engine_adapter.h"
 #include "coupling/dem/materials.h"
+#include "coupling/dem/open_floor_region.h"
 #include "coupling/dem/overlap.h"
 #include "coupling/dem/preload.h"
 #include "coupling/dem/process.h"
@@ -236,15 +237,10 @@ RelaxPlan make_plan(const Packing& packing, const Scene& scene, const RelaxSetti
                        "every contact, and the compaction cannot scale it with the sliding friction; relax with "
                        "LIGGGHTS, or without rolling friction");
   if (scene.container.kind == ContainerKind::Open) {
-    // The region: the packing's footprint (grain extents) grown by open_margin largest diameters.
     plan.has_region = true;
-    const double margin = scene.relax.open_margin * 2.0 * r_max;
-    for (int a = 0; a < 2; ++a) {
-      plan.region_lo[a] = std::numeric_limits<double>::infinity(), plan.region_hi[a] = -plan.region_lo[a];
-      for (const Grain& g : packing.grains)
-        plan.region_lo[a] = std::min(plan.region_lo[a], g.x[a] - g.r), plan.region_hi[a] = std::max(plan.region_hi[a], g.x[a] + g.r);
-      plan.region_lo[a] -= margin, plan.region_hi[a] += margin;
-    }
+    const FloorRegion region = open_floor_region(packing.grains, scene.dimension, scene.relax.open_margin * 2.0 * r_max,
+                                                 scene.relax.open_heap_angle);
+    for (int a = 0; a < 2; ++a) plan.region_lo[a] = region.lo[a], plan.region_hi[a] = region.hi[a];
   }
   return plan;
 }
@@ -540,7 +536,8 @@ RelaxResult run_engine_inputs(const Packing& packing, const Scene& scene, const 
                        {"ids", res.removed},
                        {"region", {{"x", {plan.region_lo[0], plan.region_hi[0]}}, {"y", {plan.region_lo[1], plan.region_hi[1]}}}},
                        {"rule", "open floor: grains whose centre left the region (the packing's footprint grown by "
-                                "relax.open_margin largest diameters) were removed; ids are the input packing's"}};
+                                "relax.open_margin largest diameters, and at least the heap of its grains at "
+                                "relax.open_heap_angle) were removed; ids are the input packing's"}};
   }
   meta["relax"] = info;
   if (plan.compaction.target > 0.0) {

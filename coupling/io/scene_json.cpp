@@ -249,6 +249,7 @@ json scene_core_to_json(const Scene& s) {
         {"stop_displacement", s.relax.stop_displacement},
         {"damping", s.relax.damping},
         {"open_margin", s.relax.open_margin},
+        {"open_heap_angle", s.relax.open_heap_angle},
         {"preload", s.relax.preload},
         {"target_phi", s.relax.target_phi ? json(*s.relax.target_phi) : json(nullptr)},
         {"friction_scales", s.relax.friction_scales},
@@ -353,8 +354,8 @@ Scene scene_from_json(const json& j, const std::string& origin) {
 
   const json& r = rd.object(j, "", "relax",
                             {"engine", "model", "max_time", "stop_kinetic_ratio", "timestep_fraction", "timestep",
-                             "stop_rule", "stop_unbalanced_force", "stop_displacement", "damping", "open_margin", "preload",
-                             "target_phi", "friction_scales", "compaction_damping", "compaction_timestep_fraction"});
+                             "stop_rule", "stop_unbalanced_force", "stop_displacement", "damping", "open_margin",
+                             "open_heap_angle", "preload", "target_phi", "friction_scales", "compaction_damping", "compaction_timestep_fraction"});
   s.relax.engine = rd.string(r, "relax", "engine");
   s.relax.model = rd.string(r, "relax", "model");
   s.relax.max_time = rd.number(r, "relax", "max_time");
@@ -374,6 +375,7 @@ Scene scene_from_json(const json& j, const std::string& origin) {
   if (r.contains("stop_displacement")) s.relax.stop_displacement = rd.number(r, "relax", "stop_displacement");
   if (r.contains("damping")) s.relax.damping = rd.number(r, "relax", "damping");
   if (r.contains("open_margin")) s.relax.open_margin = rd.number(r, "relax", "open_margin");
+  if (r.contains("open_heap_angle")) s.relax.open_heap_angle = rd.number(r, "relax", "open_heap_angle");
   if (r.contains("target_phi") && !r["target_phi"].is_null()) s.relax.target_phi = rd.number(r, "relax", "target_phi");
   if (r.contains("friction_scales")) {
     const json& f = r["friction_scales"];

@@ -388,8 +388,8 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   if (plan.has_region)
     s << "#\n# Open floor: the box is fixed laterally at x in [" << g6(plan.region_lo[0]) << ", " << g6(plan.region_hi[0])
       << "], y in [" << g6(plan.region_lo[1]) << ", " << g6(plan.region_hi[1])
-      << "] m (the packing's footprint + relax.open_margin largest\n# diameters); grains leaving it are lost "
-         "(removed) and counted.\n";
+      << "] m (the packing's footprint + relax.open_margin largest\n# diameters, and at least the heap of its grains at "
+         "relax.open_heap_angle); grains leaving it are lost (removed) and counted.\n";
   if (dim == 2)
     s << "#\n# 2D packing: the disks are relaxed as spheres of the same radii whose centres stay in y = 0\n"
       << "# (fix btr_plane zeroes the y force; contact normals and torques then stay in the x-z plane).\n";

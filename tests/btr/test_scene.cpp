@@ -398,7 +398,7 @@ TEST_F(SceneFile, RadiusWithAListSourceIsAnError) {
 
 TEST_F(SceneFile, RelaxStopRuleDampingAndMarginAreReadAndChecked) {
   const std::string good = kBase + "\n[relax]\nstop_rule = \"unbalanced-force\"\nstop_unbalanced_force = 5e-4\n"
-                                   "stop_displacement = 2e-3\ndamping = 0.2\nopen_margin = 4\n";
+                                   "stop_displacement = 2e-3\ndamping = 0.2\nopen_margin = 4\nopen_heap_angle = 30\n";
   path_ = write("x.toml", good);
   const Scene s = load_scene(path_);
   EXPECT_EQ(s.relax.stop_rule, "unbalanced-force");
@@ -406,6 +406,7 @@ TEST_F(SceneFile, RelaxStopRuleDampingAndMarginAreReadAndChecked) {
   EXPECT_EQ(s.relax.stop_displacement, 2e-3);
   EXPECT_EQ(s.relax.damping, 0.2);
   EXPECT_EQ(s.relax.open_margin, 4.0);
+  EXPECT_EQ(s.relax.open_heap_angle, 30.0);
   const Scene d = load_scene(write("d.toml", kBase));
   EXPECT_EQ(d.relax.stop_rule, "kinetic-energy");
   EXPECT_EQ(d.relax.damping, 0.0) << "damping is off by default";
@@ -424,6 +425,12 @@ TEST_F(SceneFile, RelaxStopRuleDampingAndMarginAreReadAndChecked) {
   EXPECT_NE(error_of(text).find("relax.stop_displacement"), std::string::npos);
   text = kBase + "\n[relax]\nopen_margin = -1\n";
   EXPECT_NE(error_of(text).find("relax.open_margin"), std::string::npos);
+  for (const char* angle : {"0", "90", "-5"}) {
+    text = kBase + "\n[relax]\nopen_heap_angle = " + angle + "\n";
+    msg = error_of(text);
+    EXPECT_EQ(msg.rfind(at(text, "open_heap_angle") + "relax.open_heap_angle", 0), 0u) << msg;
+    EXPECT_NE(msg.find("(0, 90)"), std::string::npos) << msg;
+  }
 }
 
 TEST_F(SceneFile, RelaxPreloadIsABoolean) {

@@ -171,8 +171,8 @@ def test_error_vs_runtime_on_an_open_floor_heap_counts_removed_grains(tmp_path, 
     with every runaway grain before, and the heap angle is the measure compared)."""
     scene = source_dir / "inputs" / "heap3d.toml"
     text = scene.read_text().replace("count = 5000", "count = 1000").replace("max_time = 1.0", "max_time = 0.3")
-    text += "open_margin = 1.0\n"
-    assert "count = 1000" in text and text.rstrip().endswith("open_margin = 1.0")
+    text += "open_margin = 1.0\nopen_heap_angle = 80.0\n"  # a narrow region, so some grains leave it
+    assert "count = 1000" in text and text.rstrip().endswith("open_heap_angle = 80.0")
     (tmp_path / "heap.toml").write_text(text)
     out = tmp_path / "evr"
     p = run(["error-vs-runtime", str(tmp_path / "heap.toml"), "-o", str(out), "--relax-times", "0.3",
