@@ -342,8 +342,8 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   const CheckSchedule sched = check_schedule(grains, scene, plan);
   const int n_types = static_cast<int>(types.type_material.size());
 
-  double r_min = std::numeric_limits<double>::infinity(), y_min = r_min, y_max = 0.0;
-  for (const Grain& g : grains) r_min = std::min(r_min, g.r);
+  double r_min = std::numeric_limits<double>::infinity(), y_min = r_min, y_max = 0.0, r_max = 0.0;
+  for (const Grain& g : grains) r_min = std::min(r_min, g.r), r_max = std::max(r_max, g.r);
   for (const Material& m : types.type_material) y_min = std::min(y_min, m.young), y_max = std::max(y_max, m.young);
 
   const bool hooke = scene.relax.model == "hooke";
@@ -409,7 +409,12 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
       << "group           btr_clustered molecule > 0\n"
       << "group           btr_free subtract all btr_clustered\n";
   s << "neighbor        " << g17(0.5 * r_min) << " bin\n"
-    << "neigh_modify    delay 0" << (clusters ? " exclude molecule btr_clustered" : "") << "\n";
+    << "neigh_modify    delay 0" << (clusters ? " exclude molecule btr_clustered" : "");
+  // An open floor's box is mostly empty (the heap's region, a pour's tall release lattice): bins of the whole
+  // neighbour cutoff, not LIGGGHTS' default half, clear 8x fewer at each rebuild. Measured on a 2000-grain
+  // heap pour in a 156 mm region: 70 s of CPU time with the default bins, 26 s with these.
+  if (plan.has_region) s << " binsize " << g17(2.0 * r_max + 0.5 * r_min);
+  s << "\n";
   // LIGGGHTS refuses Young's moduli outside [5e6, 1e9] Pa in SI units unless told otherwise.
   if (y_min < 5e6) s << "soft_particles  yes\n";
   if (y_max > 1e9) s << "hard_particles  yes\n";

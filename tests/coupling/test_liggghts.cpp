@@ -117,6 +117,17 @@ TEST_P(LiggghtsContainers, InputsMatchTheContainer) {
     EXPECT_EQ(boundary, c.dimension == 3 ? "boundary        p p fm" : "boundary        p f fm");
   else
     EXPECT_EQ(boundary.find(" p"), std::string::npos) << boundary;
+  // Bins of the whole neighbour cutoff (2 r_max + skin r_min / 2) only in an open floor's mostly empty box.
+  double r_min = 1.0, r_max = 0.0;
+  for (const btr::Grain& g : p.grains) r_min = std::min(r_min, g.r), r_max = std::max(r_max, g.r);
+  const std::string neigh = line_starting(script, "neigh_modify");
+  if (c.container.kind == ContainerKind::Open) {
+    const std::size_t at = neigh.find(" binsize ");
+    ASSERT_NE(at, std::string::npos) << neigh;
+    EXPECT_NEAR(std::stod(neigh.substr(at + 9)), 2.0 * r_max + 0.5 * r_min, 1e-15) << neigh;
+  } else {
+    EXPECT_EQ(neigh.find("binsize"), std::string::npos) << neigh;
+  }
   EXPECT_EQ(script.find("rolling_friction"), std::string::npos);
   EXPECT_EQ(script.find("characteristicVelocity"), std::string::npos);
   EXPECT_EQ(script.find("setforce") != std::string::npos, c.dimension == 2);
