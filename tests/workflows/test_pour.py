@@ -66,6 +66,7 @@ def test_open_floor_pour_removes_and_counts_runaway_grains(tmp_path, liggghts):
     # largest diameter beyond the footprint is narrower than the heap, so its flanks leave.
     scene = scene_json("open", 3, size=0.0, count=60, max_time=0.3, source={"kind": "point"}, rolling=0.1)
     scene["relax"]["open_margin"] = 1.0
+    scene["relax"]["open_heap_angle"] = 80.0  # a heap bound narrower than this heap too
     btr = read_packing(grains_packing(tmp_path / "btr", scene))
     s = pour(btr, tmp_path / "pour", PourSettings(seed=3, max_batches=4), quiet)
     assert 0 < s["removed"] < len(btr)
