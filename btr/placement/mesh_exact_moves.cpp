@@ -90,8 +90,9 @@ int Walker::roll_exact(Vec3& x, const Vec3& d) {
     tris.clear();
     e.mesh.collect(lo, hi, tris);
     clear = std::numeric_limits<double>::infinity();
-    for (int t : tris)
-      if (face < 0 || t != active[face].tri) clear = std::min(clear, e.mesh.distance(t, x0) - r);
+    for (int t : tris)  // (a triangle whose distance bound exceeds the nearest so far is not measured)
+      if ((face < 0 || t != active[face].tri) && e.mesh.distance_bound(t, x0) - r < clear + 1e-9 * r)
+        clear = std::min(clear, e.mesh.distance(t, x0) - r);
     clear = std::min(clear, face_margin);
   }
   if (clear < 0.1 * r) return 0;

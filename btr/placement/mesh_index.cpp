@@ -12,12 +12,13 @@ namespace btr {
 MeshIndex::MeshIndex(const TriangleMesh& mesh, double cell) : mesh_(mesh) {
   const auto& V = mesh.vertices;
   const std::size_t n = mesh.triangles.size();
-  box_lo_.resize(n), box_hi_.resize(n);
+  box_lo_.resize(n), box_hi_.resize(n), normal_.resize(n);
   std::map<std::pair<int, int>, int> edge_use;
   for (std::size_t t = 0; t < n; ++t) {
     const auto& f = mesh.triangles[t];
     box_lo_[t] = V[f[0]].cwiseMin(V[f[1]]).cwiseMin(V[f[2]]);
     box_hi_[t] = V[f[0]].cwiseMax(V[f[1]]).cwiseMax(V[f[2]]);
+    normal_[t] = (V[f[1]] - V[f[0]]).cross(V[f[2]] - V[f[0]]).normalized();
     for (int k = 0; k < 3; ++k) {
       const int a = f[k], b = f[(k + 1) % 3];
       ++edge_use[{std::min(a, b), std::max(a, b)}];
@@ -64,6 +65,13 @@ MeshIndex::MeshIndex(const TriangleMesh& mesh, double cell) : mesh_(mesh) {
       for (long i = ix(box_lo_[t].x()); i <= ix(box_hi_[t].x()); ++i)
         if (meets(i, j)) columns_[static_cast<std::size_t>(i + nx_ * j)].push_back(static_cast<int>(t));
   }
+  rim_columns_.resize(columns_.size());
+  for (std::size_t k = 0; k < rim_.size(); ++k) {
+    const Vec3 &a = V[rim_[k][0]], &b = V[rim_[k][1]];
+    for (long j = iy(std::min(a.y(), b.y())); j <= iy(std::max(a.y(), b.y())); ++j)
+      for (long i = ix(std::min(a.x(), b.x())); i <= ix(std::max(a.x(), b.x())); ++i)
+        rim_columns_[static_cast<std::size_t>(i + nx_ * j)].push_back(static_cast<int>(k));
+  }
   stamp_.assign(n, 0u);
   nz_ = std::max(1L, static_cast<long>(std::ceil((mesh.hi.z() - mesh.lo.z()) / w_)));
   cap_ = 4.0 * w_;
@@ -84,7 +92,8 @@ double MeshIndex::clearance(const Vec3& x) const {
     std::vector<int> near;
     collect(centre - Vec3::Constant(cap_), centre + Vec3::Constant(cap_), near);
     double d = cap_;
-    for (int t : near) d = std::min(d, distance(t, centre));
+    for (int t : near)
+      if (distance_bound(t, centre) < d * (1.0 + 1e-9)) d = std::min(d, distance(t, centre));
     float f = static_cast<float>(d);
     if (static_cast<double>(f) > d) f = std::nextafter(f, 0.0f);
     cell = f;
@@ -124,6 +133,13 @@ Vec3 MeshIndex::closest(int t, const Vec3& p) const {
   return a + ab * (vb * denom) + ac * (vc * denom);
 }
 
+double MeshIndex::distance_bound(int t, const Vec3& x) const {
+  const std::size_t i = static_cast<std::size_t>(t);
+  const double plane = std::abs(normal_[i].dot(x - mesh_.vertices[mesh_.triangles[i][0]]));
+  const double box = (x - x.cwiseMax(box_lo_[i]).cwiseMin(box_hi_[i])).norm();
+  return std::isnan(plane) ? box : std::max(plane, box);
+}
+
 void MeshIndex::collect(const Vec3& lo, const Vec3& hi, std::vector<int>& out) const {
   if (hi.x() < mesh_.lo.x() || lo.x() > mesh_.hi.x() || hi.y() < mesh_.lo.y() || lo.y() > mesh_.hi.y()) return;
   if (++visit_ == 0) std::fill(stamp_.begin(), stamp_.end(), 0u), visit_ = 1;
@@ -146,21 +162,26 @@ double MeshIndex::fall_contact(int t, const Vec3& x, double r, double z_floor) c
   const Vec3& bh = box_hi_[static_cast<std::size_t>(t)];
   if (x.x() < bl.x() - r || x.x() > bh.x() + r || x.y() < bl.y() - r || x.y() > bh.y() + r) return nan;
   if (bl.z() - r > x.z()) return nan;
+  const double z0 = x.z();
+  double lo = std::min(bl.z() - 2.0 * r, z0), hi = z0;
+  const Vec3& v0 = mesh_.vertices[mesh_.triangles[static_cast<std::size_t>(t)][0]];
+  const Vec3& n = normal(t);
+  {
+    // Within r of the triangle is within r of its plane; the distance from the plane is linear along the
+    // line, so a search interval whose ends both keep more than r from it on one side never comes within r.
+    const double h_hi = n.dot(x - v0), h_lo = h_hi + n.z() * (lo - z0);
+    if ((h_hi > r && h_lo > r) || (h_hi < -r && h_lo < -r)) return nan;
+  }
   if (std::isfinite(z_floor)) {
     // Within r of the triangle is within r of its plane: at most r / |n_z| above where the line crosses it.
-    const auto& f = mesh_.triangles[static_cast<std::size_t>(t)];
-    const Vec3& a = mesh_.vertices[f[0]];
-    const Vec3 n = (mesh_.vertices[f[1]] - a).cross(mesh_.vertices[f[2]] - a).normalized();
     if (std::abs(n.z()) > 1e-3) {
-      const double z_plane = a.z() - (n.x() * (x.x() - a.x()) + n.y() * (x.y() - a.y())) / n.z();
+      const double z_plane = v0.z() - (n.x() * (x.x() - v0.x()) + n.y() * (x.y() - v0.y())) / n.z();
       if (z_plane + r / std::abs(n.z()) + 1e-9 * r < z_floor) return nan;
     }
   }
   // The distance along the line is convex in z: its minimum by golden section on [z_lo, z0], then the
   // highest height at distance r above the minimum by bisection.
   auto f = [&](double z) { return distance(t, Vec3(x.x(), x.y(), z)); };
-  const double z0 = x.z();
-  double lo = std::min(bl.z() - 2.0 * r, z0), hi = z0;
   const double g = 0.5 * (std::sqrt(5.0) - 1.0);
   double a = hi - g * (hi - lo), b = lo + g * (hi - lo), fa = f(a), fb = f(b);
   for (int it = 0; it < 120 && hi - lo > 1e-15 * r; ++it) {
@@ -201,6 +222,28 @@ int MeshIndex::crossings_below(double x, double y, double z) const {
   return count;
 }
 
+// The first rim edge (in index order) within r of (x, y) horizontally, or -1. A rim point within r lies in
+// a column of the box (x -+ r, y -+ r), and its edge is held by every column its x-y box meets.
+int MeshIndex::rim_within(double x, double y, double r) const {
+  const auto& V = mesh_.vertices;
+  int first = -1;
+  for (long j = iy(y - r); j <= iy(y + r); ++j)
+    for (long i = ix(x - r); i <= ix(x + r); ++i)
+      for (int k : rim_columns_[static_cast<std::size_t>(i + nx_ * j)]) {
+        if (first >= 0 && k >= first) continue;
+        const Vec3 &a = V[rim_[static_cast<std::size_t>(k)][0]], &b = V[rim_[static_cast<std::size_t>(k)][1]];
+        const double ex = b.x() - a.x(), ey = b.y() - a.y(), len2 = ex * ex + ey * ey;
+        const double s = len2 > 0.0 ? std::clamp(((x - a.x()) * ex + (y - a.y()) * ey) / len2, 0.0, 1.0) : 0.0;
+        const double dx = x - a.x() - s * ex, dy = y - a.y() - s * ey;
+        if (dx * dx + dy * dy < r * r) first = k;
+      }
+  return first;
+}
+
+bool MeshIndex::in_footprint(double x, double y, double r) const {
+  return crossings_below(x, y, std::numeric_limits<double>::infinity()) % 2 == 1 && rim_within(x, y, r) < 0;
+}
+
 std::string MeshIndex::footprint_misfit(double x, double y, double r) const {
   const int n = crossings_below(x, y, std::numeric_limits<double>::infinity());
   if (n % 2 == 0) {
@@ -210,19 +253,14 @@ std::string MeshIndex::footprint_misfit(double x, double y, double r) const {
         << "), a grain dropped there would fall past it or land outside it";
     return why.str();
   }
-  const auto& V = mesh_.vertices;
-  for (const auto& e : rim_) {
-    const Vec3 &a = V[e[0]], &b = V[e[1]];
-    const double ex = b.x() - a.x(), ey = b.y() - a.y(), len2 = ex * ex + ey * ey;
-    const double s = len2 > 0.0 ? std::clamp(((x - a.x()) * ex + (y - a.y()) * ey) / len2, 0.0, 1.0) : 0.0;
-    const double dx = x - a.x() - s * ex, dy = y - a.y() - s * ey;
-    if (dx * dx + dy * dy < r * r) {
-      std::ostringstream why;
-      why << "(x, y) = (" << x << ", " << y << ") puts a grain of radius " << r << " over the open rim of the mesh "
-          << mesh_.file << " (an edge of one triangle only, from (" << a.x() << ", " << a.y() << ", " << a.z() << ") to ("
-          << b.x() << ", " << b.y() << ", " << b.z() << ")): it could land on the rim or outside it";
-      return why.str();
-    }
+  const int k = rim_within(x, y, r);
+  if (k >= 0) {
+    const Vec3 &a = mesh_.vertices[rim_[static_cast<std::size_t>(k)][0]], &b = mesh_.vertices[rim_[static_cast<std::size_t>(k)][1]];
+    std::ostringstream why;
+    why << "(x, y) = (" << x << ", " << y << ") puts a grain of radius " << r << " over the open rim of the mesh "
+        << mesh_.file << " (an edge of one triangle only, from (" << a.x() << ", " << a.y() << ", " << a.z() << ") to ("
+        << b.x() << ", " << b.y() << ", " << b.z() << ")): it could land on the rim or outside it";
+    return why.str();
   }
   return {};
 }

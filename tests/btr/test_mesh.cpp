@@ -120,6 +120,47 @@ TEST(MeshIndex, FallContactOnFaceEdgeAndVertex) {
   EXPECT_TRUE(std::isnan(idx.fall_contact(0, Vec3(1, 1, -5), r)));
 }
 
+TEST(MeshIndex, FallContactBesideAVerticalTriangle) {
+  // The triangle (0,0,0), (0,4,0), (0,0,4) in the plane x = 0; a grain of radius 1 falling from z = 50.
+  const double r = 1.0;
+  TriangleMesh m;
+  m.vertices = {{0, 0, 0}, {0, 4, 0}, {0, 0, 4}};
+  m.triangles = {{0, 1, 2}};
+  m.lo = Vec3(0, 0, 0), m.hi = Vec3(0, 4, 4);
+  const MeshIndex idx(m, 1.0);
+  // Farther than r from the plane on either side: never within r of the triangle.
+  EXPECT_TRUE(std::isnan(idx.fall_contact(0, Vec3(1.5, 1, 50), r)));
+  EXPECT_TRUE(std::isnan(idx.fall_contact(0, Vec3(-1.2, 1, 50), r)));
+  // At x = 0.6 over y = 1 the line enters the cylinder about the edge y + z = 4 first:
+  // 0.6^2 + (1 + z - 4)^2 / 2 = 1.
+  EXPECT_NEAR(idx.fall_contact(0, Vec3(0.6, 1, 50), r), 3.0 + std::sqrt(1.28), kTol);
+  EXPECT_NEAR(idx.fall_contact(0, Vec3(-0.6, 1, 50), r), 3.0 + std::sqrt(1.28), kTol);
+}
+
+TEST(MeshIndex, FootprintOfAnOpenCupByItsCrossingsAndItsRim) {
+  // A cup: the floor [-5, 5]^2 at z = 0 and four walls up to z = 5, open at the top (the walls' top edges
+  // are edges of one triangle only: the rim).
+  std::vector<Vec3> v = {{-5, -5, 0}, {5, -5, 0}, {5, 5, 0}, {-5, 5, 0}, {-5, -5, 5}, {5, -5, 5}, {5, 5, 5}, {-5, 5, 5}};
+  TriangleMesh m;
+  m.vertices = v;
+  quad(m.triangles, 0, 1, 2, 3);
+  for (int k = 0; k < 4; ++k) quad(m.triangles, k, (k + 1) % 4, 4 + (k + 1) % 4, 4 + k);
+  m.lo = Vec3(-5, -5, 0), m.hi = Vec3(5, 5, 5);
+  m.file = "cup.stl";
+  const MeshIndex idx(m, 0.5);  // columns much narrower than a rim edge
+  EXPECT_TRUE(idx.in_footprint(0.0, 0.0, 1.0));
+  EXPECT_TRUE(idx.in_footprint(4.5, 0.3, 0.4));   // 0.5 from the rim x = 5
+  EXPECT_FALSE(idx.in_footprint(4.5, 0.3, 0.6));  // within r of it
+  EXPECT_FALSE(idx.in_footprint(-4.2, 4.3, 0.8)); // within r of the rim y = 5 only
+  EXPECT_FALSE(idx.in_footprint(6.0, 0.0, 0.1));  // outside: the line misses the cup
+  EXPECT_NE(idx.footprint_misfit(4.5, 0.3, 0.6).find("from (5, -5, 5) to (5, 5, 5)"), std::string::npos)
+      << idx.footprint_misfit(4.5, 0.3, 0.6);
+  // The reason is given exactly where the test fails, on a grid over and around the cup.
+  for (double x = -6.05; x < 6.1; x += 0.37)
+    for (double y = -6.05; y < 6.1; y += 0.41)
+      EXPECT_EQ(idx.in_footprint(x, y, 0.7), idx.footprint_misfit(x, y, 0.7).empty()) << x << " " << y;
+}
+
 TEST(MeshPlacement, FallsOntoAFlatFaceAndRests) {
   const HandMesh h = floor_mesh();
   Deposition dep(3, h.container, 1.0);
