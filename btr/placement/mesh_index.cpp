@@ -73,21 +73,26 @@ MeshIndex::MeshIndex(const TriangleMesh& mesh, double cell) : mesh_(mesh) {
         rim_columns_[static_cast<std::size_t>(i + nx_ * j)].push_back(static_cast<int>(k));
   }
   stamp_.assign(n, 0u);
-  nz_ = std::max(1L, static_cast<long>(std::ceil((mesh.hi.z() - mesh.lo.z()) / w_)));
-  cap_ = 4.0 * w_;
-  if (static_cast<double>(nx_) * static_cast<double>(ny_) * static_cast<double>(nz_) <= 1 << 24)
-    field_.assign(static_cast<std::size_t>(nx_ * ny_ * nz_), std::numeric_limits<float>::quiet_NaN());
+  // The clearance cells are two columns wide: a fill costs a collect over the cap's box, and the bound it
+  // gives (the cell centre's distance less the point's offset, up to 1.7 w_) still covers a grain's arc.
+  fw_ = 2.0 * w_;
+  fnx_ = std::max(1L, static_cast<long>(std::ceil(lx / fw_)));
+  fny_ = std::max(1L, static_cast<long>(std::ceil(ly / fw_)));
+  fnz_ = std::max(1L, static_cast<long>(std::ceil((mesh.hi.z() - mesh.lo.z()) / fw_)));
+  cap_ = 5.0 * w_;
+  if (static_cast<double>(fnx_) * static_cast<double>(fny_) * static_cast<double>(fnz_) <= 1 << 24)
+    field_.assign(static_cast<std::size_t>(fnx_ * fny_ * fnz_), std::numeric_limits<float>::quiet_NaN());
 }
 
 double MeshIndex::clearance(const Vec3& x) const {
   const Vec3 outside = (mesh_.lo - x).cwiseMax(x - mesh_.hi).cwiseMax(0.0);
   if (outside.squaredNorm() > 0.0) return outside.norm();
   if (field_.empty()) return 0.0;
-  const long i = ix(x.x()), j = iy(x.y());
-  const long k = std::clamp(static_cast<long>(std::floor((x.z() - mesh_.lo.z()) / w_)), 0L, nz_ - 1);
-  const Vec3 centre(x0_ + (static_cast<double>(i) + 0.5) * w_, y0_ + (static_cast<double>(j) + 0.5) * w_,
-                    mesh_.lo.z() + (static_cast<double>(k) + 0.5) * w_);
-  float& cell = field_[static_cast<std::size_t>(i + nx_ * (j + ny_ * k))];
+  auto cell_of = [&](double v, double v0, long n) { return std::clamp(static_cast<long>(std::floor((v - v0) / fw_)), 0L, n - 1); };
+  const long i = cell_of(x.x(), x0_, fnx_), j = cell_of(x.y(), y0_, fny_), k = cell_of(x.z(), mesh_.lo.z(), fnz_);
+  const Vec3 centre(x0_ + (static_cast<double>(i) + 0.5) * fw_, y0_ + (static_cast<double>(j) + 0.5) * fw_,
+                    mesh_.lo.z() + (static_cast<double>(k) + 0.5) * fw_);
+  float& cell = field_[static_cast<std::size_t>(i + fnx_ * (j + fny_ * k))];
   if (std::isnan(cell)) {
     std::vector<int> near;
     collect(centre - Vec3::Constant(cap_), centre + Vec3::Constant(cap_), near);

@@ -73,9 +73,10 @@ class MeshIndex {
   std::vector<std::vector<int>> columns_;
   mutable std::vector<unsigned> stamp_;  // collect(): a triangle already taken in this call
   mutable unsigned visit_ = 0;
-  // clearance(): cells of width w_ over the mesh's box, each the distance of its centre from the mesh up
+  // clearance(): cells of width fw_ over the mesh's box, each the distance of its centre from the mesh up
   // to cap_ (rounded down), NaN until asked for; empty when there would be too many cells.
-  long nz_ = 0;
+  double fw_ = 0.0;
+  long fnx_ = 0, fny_ = 0, fnz_ = 0;
   double cap_ = 0.0;
   mutable std::vector<float> field_;
 };
