@@ -1,5 +1,7 @@
 #include "btr/placement/mesh_index.h"
 
+#include "btr/placement/mesh_line_reach.h"
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -168,12 +170,12 @@ double MeshIndex::fall_contact(int t, const Vec3& x, double r, double z_floor) c
   if (x.x() < bl.x() - r || x.x() > bh.x() + r || x.y() < bl.y() - r || x.y() > bh.y() + r) return nan;
   if (bl.z() - r > x.z()) return nan;
   const double z0 = x.z();
-  double lo = std::min(bl.z() - 2.0 * r, z0), hi = z0;
+  const double lo = std::min(bl.z() - 2.0 * r, z0);  // t lies above bl.z - r
   const Vec3& v0 = mesh_.vertices[mesh_.triangles[static_cast<std::size_t>(t)][0]];
   const Vec3& n = normal(t);
   {
     // Within r of the triangle is within r of its plane; the distance from the plane is linear along the
-    // line, so a search interval whose ends both keep more than r from it on one side never comes within r.
+    // line, so a line whose ends at lo and z0 both keep more than r from it on one side never comes within r.
     const double h_hi = n.dot(x - v0), h_lo = h_hi + n.z() * (lo - z0);
     if ((h_hi > r && h_lo > r) || (h_hi < -r && h_lo < -r)) return nan;
   }
@@ -184,9 +186,24 @@ double MeshIndex::fall_contact(int t, const Vec3& x, double r, double z_floor) c
       if (z_plane + r / std::abs(n.z()) + 1e-9 * r < z_floor) return nan;
     }
   }
-  // The distance along the line is convex in z: its minimum by golden section on [z_lo, z0], then the
-  // highest height at distance r above the minimum by bisection.
+  // In closed form: the heights where the line is within r of t, and within r (1 - 1e-10): one that comes
+  // no nearer only grazes it (a grain sliding down a vertical wall), no contact.
+  const auto& f = mesh_.triangles[static_cast<std::size_t>(t)];
+  const Vec3 &va = mesh_.vertices[f[0]], &vb = mesh_.vertices[f[1]], &vc = mesh_.vertices[f[2]];
+  if (line_within(va, vb, vc, n, x, r * (1.0 - 1e-10)).empty()) return nan;
+  const HeightInterval in = line_within(va, vb, vc, n, x, r);
+  if (in.lo > -1e-12 * r) return nan;  // within r only from the start up: moving away
+  if (in.hi < 0.0) return z0 + in.hi;  // below the start: its top is the first contact
+  // Touching at the start: a contact if the distance falls below it (the old search, for this rare case).
+  return touching_fall(t, x, r, lo);
+}
+
+// The distance along the line is convex in z: its minimum by golden section on [lo, x.z]; touching at x, the
+// grain moves into t if that minimum lies below.
+double MeshIndex::touching_fall(int t, const Vec3& x, double r, double lo) const {
   auto f = [&](double z) { return distance(t, Vec3(x.x(), x.y(), z)); };
+  const double z0 = x.z();
+  double hi = z0;
   const double g = 0.5 * (std::sqrt(5.0) - 1.0);
   double a = hi - g * (hi - lo), b = lo + g * (hi - lo), fa = f(a), fb = f(b);
   for (int it = 0; it < 120 && hi - lo > 1e-15 * r; ++it) {
@@ -194,15 +211,8 @@ double MeshIndex::fall_contact(int t, const Vec3& x, double r, double z_floor) c
     else lo = a, a = b, fa = fb, b = lo + g * (hi - lo), fb = f(b);
   }
   const double z_min = 0.5 * (lo + hi);
-  if (f(z_min) > r * (1.0 - 1e-10)) return nan;  // passes beside it, or grazes it (sliding down a vertical wall)
-  if (z_min >= z0 - 1e-12 * r) return nan;   // the line moves away from it (or along it) from here down
-  if (f(z0) <= r) return z0;                 // touching at the start and moving in
-  double in = z_min, out = z0;               // f(in) <= r < f(out)
-  for (int it = 0; it < 200 && out - in > 1e-16 * std::max(1.0, std::abs(out)); ++it) {
-    const double m = 0.5 * (in + out);
-    (f(m) <= r ? in : out) = m;
-  }
-  return in;
+  if (z_min >= z0 - 1e-12 * r) return std::numeric_limits<double>::quiet_NaN();
+  return z0;
 }
 
 int MeshIndex::crossings_below(double x, double y, double z) const {

@@ -59,6 +59,7 @@ class MeshIndex {
  private:
   const std::vector<int>& column(double x, double y) const;
   int rim_within(double x, double y, double r) const;
+  double touching_fall(int t, const Vec3& x, double r, double lo) const;
   long ix(double x) const;
   long iy(double y) const;
 

@@ -13,6 +13,7 @@
 #include "btr/placement/deposition.h"
 #include "btr/placement/drops.h"
 #include "btr/placement/mesh_index.h"
+#include "btr/placement/mesh_line_reach.h"
 #include "btr/placement/run_scene.h"
 #include "btr/scene/mesh_file.h"
 #include "btr/scene/scene_toml.h"
@@ -118,6 +119,27 @@ TEST(MeshIndex, FallContactOnFaceEdgeAndVertex) {
   EXPECT_TRUE(std::isnan(idx.fall_contact(0, Vec3(6, 2, 50), r)));
   // Below it, moving away: no contact.
   EXPECT_TRUE(std::isnan(idx.fall_contact(0, Vec3(1, 1, -5), r)));
+}
+
+TEST(MeshLineReach, HeightsWithinADistanceOfFaceEdgeVertexAndTheirUnion) {
+  // The triangle (0,0,0), (4,0,0), (0,4,0), d = 1, lines from height 10 (offsets from there).
+  const Vec3 a(0, 0, 0), b(4, 0, 0), c(0, 4, 0), n(0, 0, 1);
+  auto at = [&](double x, double y) { return line_within(a, b, c, n, Vec3(x, y, 10.0), 1.0); };
+  HeightInterval s = at(1, 1);  // over the face: the slab |z| <= 1
+  EXPECT_NEAR(s.lo, -11.0, 1e-12);
+  EXPECT_NEAR(s.hi, -9.0, 1e-12);
+  s = at(2, -0.6);  // beside the edge a-b: 0.36 + z^2 <= 1
+  EXPECT_NEAR(s.lo, -10.8, 1e-12);
+  EXPECT_NEAR(s.hi, -9.2, 1e-12);
+  s = at(4.3, -0.4);  // beyond the vertex b: 0.09 + 0.16 + z^2 <= 1
+  EXPECT_NEAR(s.hi, -10.0 + std::sqrt(0.75), 1e-12);
+  EXPECT_NEAR(s.lo, -10.0 - std::sqrt(0.75), 1e-12);
+  EXPECT_TRUE(at(6, 2).empty());
+  // A vertical triangle in the plane x = 0, the line at x = 0.6 over y = 1: from the cylinder about the
+  // edge z = 0 (0.36 + z^2 <= 1) up through the slab to the cylinder about y + z = 4 (0.36 + (z - 3)^2 / 2 <= 1).
+  const HeightInterval v = line_within(Vec3(0, 0, 0), Vec3(0, 4, 0), Vec3(0, 0, 4), Vec3(1, 0, 0), Vec3(0.6, 1, 0), 1.0);
+  EXPECT_NEAR(v.lo, -0.8, 1e-12);
+  EXPECT_NEAR(v.hi, 3.0 + std::sqrt(1.28), 1e-12);
 }
 
 TEST(MeshIndex, FallContactBesideAVerticalTriangle) {
