@@ -1,13 +1,13 @@
 #include "btr/placement/mesh_index.h"
 
-#include "btr/placement/mesh_line_reach.h"
-
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
 #include <sstream>
+
+#include "btr/placement/mesh_line_reach.h"
 
 namespace btr {
 
