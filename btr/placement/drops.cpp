@@ -188,7 +188,7 @@ void DropSequence::position(double r, Drop& d) {
           for (int k = 0; k < kTries; ++k) {
             d.x = (-0.5 * c.size_x + r) + uniform() * (c.size_x - 2.0 * r);
             d.y = (-0.5 * c.size_y + r) + uniform() * (c.size_y - 2.0 * r);
-            if (mesh_->footprint_misfit(d.x, d.y, r).empty()) return;
+            if (mesh_->in_footprint(d.x, d.y, r)) return;
           }
           throw PlacementError(drawn_ + 1, "the rain cannot reach the footprint of the mesh " + c.mesh->file + ": none of " +
                                                std::to_string(kTries) + " drops of radius " + std::to_string(r) +

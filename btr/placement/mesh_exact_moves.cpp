@@ -81,17 +81,20 @@ int Walker::roll_exact(Vec3& x, const Vec3& d) {
   if (!arc.u.allFinite() || !arc.v.allFinite() || !(arc.rho > 0.0)) return 0;
   const Vec3 x0 = arc.at(0.0);
   // The contact point stays on the face while its projection, which moves no more than the centre,
-  // keeps inside the face's edges.
+  // keeps inside the face's edges. Otherwise the cheap bound first; the triangles are measured when it does
+  // not cover the arc or is below the walker's r/10 (so what follows depends on the geometry only, not on
+  // the bound's cells).
   double clear = face >= 0 ? -1.0 : e.mesh.clearance(x0) - r;
-  if (clear * (1.0 - 1e-9) < arc.rho * arc.t_end) {
+  if (clear * (1.0 - 1e-9) < arc.rho * arc.t_end || clear < 0.1 * r) {
     Vec3 lo, hi;
     arc.bounds(lo, hi);
     lo = lo.cwiseMin(x0) - Vec3::Constant(r), hi = hi.cwiseMax(x0) + Vec3::Constant(r);
     tris.clear();
     e.mesh.collect(lo, hi, tris);
     clear = std::numeric_limits<double>::infinity();
-    for (int t : tris)
-      if (face < 0 || t != active[face].tri) clear = std::min(clear, e.mesh.distance(t, x0) - r);
+    for (int t : tris)  // (a triangle whose distance bound exceeds the nearest so far is not measured)
+      if ((face < 0 || t != active[face].tri) && e.mesh.distance_bound(t, x0) - r < clear + 1e-9 * r)
+        clear = std::min(clear, e.mesh.distance(t, x0) - r);
     clear = std::min(clear, face_margin);
   }
   if (clear < 0.1 * r) return 0;

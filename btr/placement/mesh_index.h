@@ -24,9 +24,14 @@ class MeshIndex {
   // coplanar only to about this.
   double vertex_roundoff() const { return vertex_roundoff_; }
 
+  // Triangle t's unit normal, (b - a) x (c - a) normalized (NaN components for a degenerate triangle).
+  const Vec3& normal(int t) const { return normal_[static_cast<std::size_t>(t)]; }
+
   // The point of triangle t closest to x.
   Vec3 closest(int t, const Vec3& x) const;
   double distance(int t, const Vec3& x) const { return (x - closest(t, x)).norm(); }
+  // A cheap lower bound of distance(t, x): the larger of the distances from t's plane and from its bounding box.
+  double distance_bound(int t, const Vec3& x) const;
 
   // Every triangle whose bounding box meets the box [lo, hi] and whose shadow meets a column under it (so
   // every triangle with a point in the box), once each, in increasing index (appended).
@@ -48,24 +53,31 @@ class MeshIndex {
   // crosses the mesh an odd number of times, and no open rim (an edge of one triangle only) lies within r
   // of it horizontally. Otherwise why not, naming the file.
   std::string footprint_misfit(double x, double y, double r) const;
+  // The same test without the reason (the rain draws until it holds).
+  bool in_footprint(double x, double y, double r) const;
 
  private:
   const std::vector<int>& column(double x, double y) const;
+  int rim_within(double x, double y, double r) const;
+  double touching_fall(int t, const Vec3& x, double r, double lo) const;
   long ix(double x) const;
   long iy(double y) const;
 
   const TriangleMesh& mesh_;
   double vertex_roundoff_ = 0.0;
   std::vector<Vec3> box_lo_, box_hi_;  // each triangle's bounding box
+  std::vector<Vec3> normal_;
   std::vector<std::array<int, 2>> rim_;  // edges of one triangle only (an open mesh's rims and outlets)
+  std::vector<std::vector<int>> rim_columns_;  // per column, the rim edges whose x-y box meets it
   double x0_, y0_, w_;
   long nx_, ny_;
   std::vector<std::vector<int>> columns_;
   mutable std::vector<unsigned> stamp_;  // collect(): a triangle already taken in this call
   mutable unsigned visit_ = 0;
-  // clearance(): cells of width w_ over the mesh's box, each the distance of its centre from the mesh up
+  // clearance(): cells of width fw_ over the mesh's box, each the distance of its centre from the mesh up
   // to cap_ (rounded down), NaN until asked for; empty when there would be too many cells.
-  long nz_ = 0;
+  double fw_ = 0.0;
+  long fnx_ = 0, fny_ = 0, fnz_ = 0;
   double cap_ = 0.0;
   mutable std::vector<float> field_;
 };

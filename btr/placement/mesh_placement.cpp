@@ -227,6 +227,15 @@ Vec3 Walker::place(Vec3 x) {
 
 Vec3 place_in_mesh(const MeshEngine& engine, std::int64_t id, Vec3 x, double r) {
   mesh_walk::Walker w{engine, id, r, {}, {}, Vec3::Constant(std::numeric_limits<double>::quiet_NaN()), {}, {}, {}, {}, {}};
+  // The walker's lists keep their storage from one grain to the next (allocating them per grain cost more
+  // than some of the moves).
+  thread_local mesh_walk::Walker::Lists lists;
+  w.take(lists);
+  struct Return {
+    mesh_walk::Walker& w;
+    mesh_walk::Walker::Lists& lists;
+    ~Return() { w.give(lists); }
+  } give_back{w, lists};
   x = w.place(x);
   if (!x.allFinite()) throw PlacementError(id, "the placement ended at a non-finite position");
   if (engine.mesh.crossings_below(x.x(), x.y(), x.z()) % 2 == 0)

@@ -39,6 +39,22 @@ struct Walker {
   std::vector<int> face_hits;     // reused: the faces a slide meets
   std::vector<Obstacle> segment_hits;  // reused: the grains a slide meets first
 
+  // The lists' storage, handed from one walker to the next (cleared).
+  struct Lists {
+    std::vector<Partner> active, near, entering, scratch;
+    std::vector<int> tris, face_hits;
+    std::vector<Obstacle> segment_hits;
+  };
+  void take(Lists& l) {
+    active.swap(l.active), near.swap(l.near), entering.swap(l.entering), scratch.swap(l.scratch);
+    tris.swap(l.tris), face_hits.swap(l.face_hits), segment_hits.swap(l.segment_hits);
+    active.clear(), near.clear(), entering.clear(), scratch.clear(), tris.clear(), face_hits.clear(), segment_hits.clear();
+  }
+  void give(Lists& l) {
+    active.swap(l.active), near.swap(l.near), entering.swap(l.entering), scratch.swap(l.scratch);
+    tris.swap(l.tris), face_hits.swap(l.face_hits), segment_hits.swap(l.segment_hits);
+  }
+
   double gap(const Partner& p, const Vec3& x) const {
     return p.tri >= 0 ? e.mesh.distance(p.tri, x) - r : (x - p.c).norm() - p.R;
   }

@@ -13,6 +13,7 @@
 #include "btr/placement/deposition.h"
 #include "btr/placement/drops.h"
 #include "btr/placement/mesh_index.h"
+#include "btr/placement/mesh_line_reach.h"
 #include "btr/placement/run_scene.h"
 #include "btr/scene/mesh_file.h"
 #include "btr/scene/scene_toml.h"
@@ -118,6 +119,68 @@ TEST(MeshIndex, FallContactOnFaceEdgeAndVertex) {
   EXPECT_TRUE(std::isnan(idx.fall_contact(0, Vec3(6, 2, 50), r)));
   // Below it, moving away: no contact.
   EXPECT_TRUE(std::isnan(idx.fall_contact(0, Vec3(1, 1, -5), r)));
+}
+
+TEST(MeshLineReach, HeightsWithinADistanceOfFaceEdgeVertexAndTheirUnion) {
+  // The triangle (0,0,0), (4,0,0), (0,4,0), d = 1, lines from height 10 (offsets from there).
+  const Vec3 a(0, 0, 0), b(4, 0, 0), c(0, 4, 0), n(0, 0, 1);
+  auto at = [&](double x, double y) { return line_within(a, b, c, n, Vec3(x, y, 10.0), 1.0); };
+  HeightInterval s = at(1, 1);  // over the face: the slab |z| <= 1
+  EXPECT_NEAR(s.lo, -11.0, 1e-12);
+  EXPECT_NEAR(s.hi, -9.0, 1e-12);
+  s = at(2, -0.6);  // beside the edge a-b: 0.36 + z^2 <= 1
+  EXPECT_NEAR(s.lo, -10.8, 1e-12);
+  EXPECT_NEAR(s.hi, -9.2, 1e-12);
+  s = at(4.3, -0.4);  // beyond the vertex b: 0.09 + 0.16 + z^2 <= 1
+  EXPECT_NEAR(s.hi, -10.0 + std::sqrt(0.75), 1e-12);
+  EXPECT_NEAR(s.lo, -10.0 - std::sqrt(0.75), 1e-12);
+  EXPECT_TRUE(at(6, 2).empty());
+  // A vertical triangle in the plane x = 0, the line at x = 0.6 over y = 1: from the cylinder about the
+  // edge z = 0 (0.36 + z^2 <= 1) up through the slab to the cylinder about y + z = 4 (0.36 + (z - 3)^2 / 2 <= 1).
+  const HeightInterval v = line_within(Vec3(0, 0, 0), Vec3(0, 4, 0), Vec3(0, 0, 4), Vec3(1, 0, 0), Vec3(0.6, 1, 0), 1.0);
+  EXPECT_NEAR(v.lo, -0.8, 1e-12);
+  EXPECT_NEAR(v.hi, 3.0 + std::sqrt(1.28), 1e-12);
+}
+
+TEST(MeshIndex, FallContactBesideAVerticalTriangle) {
+  // The triangle (0,0,0), (0,4,0), (0,0,4) in the plane x = 0; a grain of radius 1 falling from z = 50.
+  const double r = 1.0;
+  TriangleMesh m;
+  m.vertices = {{0, 0, 0}, {0, 4, 0}, {0, 0, 4}};
+  m.triangles = {{0, 1, 2}};
+  m.lo = Vec3(0, 0, 0), m.hi = Vec3(0, 4, 4);
+  const MeshIndex idx(m, 1.0);
+  // Farther than r from the plane on either side: never within r of the triangle.
+  EXPECT_TRUE(std::isnan(idx.fall_contact(0, Vec3(1.5, 1, 50), r)));
+  EXPECT_TRUE(std::isnan(idx.fall_contact(0, Vec3(-1.2, 1, 50), r)));
+  // At x = 0.6 over y = 1 the line enters the cylinder about the edge y + z = 4 first:
+  // 0.6^2 + (1 + z - 4)^2 / 2 = 1.
+  EXPECT_NEAR(idx.fall_contact(0, Vec3(0.6, 1, 50), r), 3.0 + std::sqrt(1.28), kTol);
+  EXPECT_NEAR(idx.fall_contact(0, Vec3(-0.6, 1, 50), r), 3.0 + std::sqrt(1.28), kTol);
+}
+
+TEST(MeshIndex, FootprintOfAnOpenCupByItsCrossingsAndItsRim) {
+  // A cup: the floor [-5, 5]^2 at z = 0 and four walls up to z = 5, open at the top (the walls' top edges
+  // are edges of one triangle only: the rim).
+  std::vector<Vec3> v = {{-5, -5, 0}, {5, -5, 0}, {5, 5, 0}, {-5, 5, 0}, {-5, -5, 5}, {5, -5, 5}, {5, 5, 5}, {-5, 5, 5}};
+  TriangleMesh m;
+  m.vertices = v;
+  quad(m.triangles, 0, 1, 2, 3);
+  for (int k = 0; k < 4; ++k) quad(m.triangles, k, (k + 1) % 4, 4 + (k + 1) % 4, 4 + k);
+  m.lo = Vec3(-5, -5, 0), m.hi = Vec3(5, 5, 5);
+  m.file = "cup.stl";
+  const MeshIndex idx(m, 0.5);  // columns much narrower than a rim edge
+  EXPECT_TRUE(idx.in_footprint(0.0, 0.0, 1.0));
+  EXPECT_TRUE(idx.in_footprint(4.5, 0.3, 0.4));   // 0.5 from the rim x = 5
+  EXPECT_FALSE(idx.in_footprint(4.5, 0.3, 0.6));  // within r of it
+  EXPECT_FALSE(idx.in_footprint(-4.2, 4.3, 0.8)); // within r of the rim y = 5 only
+  EXPECT_FALSE(idx.in_footprint(6.0, 0.0, 0.1));  // outside: the line misses the cup
+  EXPECT_NE(idx.footprint_misfit(4.5, 0.3, 0.6).find("from (5, -5, 5) to (5, 5, 5)"), std::string::npos)
+      << idx.footprint_misfit(4.5, 0.3, 0.6);
+  // The reason is given exactly where the test fails, on a grid over and around the cup.
+  for (double x = -6.05; x < 6.1; x += 0.37)
+    for (double y = -6.05; y < 6.1; y += 0.41)
+      EXPECT_EQ(idx.in_footprint(x, y, 0.7), idx.footprint_misfit(x, y, 0.7).empty()) << x << " " << y;
 }
 
 TEST(MeshPlacement, FallsOntoAFlatFaceAndRests) {
