@@ -215,8 +215,7 @@ BedHeightMeasures bed_height_measures(const Grains& grains, int dimension, const
     case ContainerKind::Cylinder: footprint = M_PI * container.radius * container.radius; break;
     default: break;
   }
-  double volume = 0.0;
-  for (const Grain& g : grains) volume += dimension == 3 ? 4.0 / 3.0 * M_PI * g.r * g.r * g.r : M_PI * g.r * g.r;
+  const double volume = solid_volume(grains, dimension);
   m.packing_fraction = m.mean_height > 0.0 ? volume / (footprint * m.mean_height) : 0.0;
   return m;
 }

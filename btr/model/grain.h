@@ -1,6 +1,7 @@
 #pragma once
 // The grains of a packing: the one data structure every stage shares.
 #include <Eigen/Core>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -17,5 +18,17 @@ struct Grain {
 };
 
 using Grains = std::vector<Grain>;
+
+// Volume of a sphere of radius r (3D), or area of a disk (2D).
+inline double grain_volume(double r, int dimension) {
+  return dimension == 3 ? 4.0 / 3.0 * M_PI * r * r * r : M_PI * r * r;
+}
+
+// What the grains fill: the sum of their volumes (3D) or areas (2D).
+inline double solid_volume(const Grains& grains, int dimension) {
+  double volume = 0.0;
+  for (const Grain& g : grains) volume += grain_volume(g.r, dimension);
+  return volume;
+}
 
 }  // namespace btr

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "btr/model/container.h"
+#include "btr/model/grain.h"
 #include "btr/placement/drops.h"
 #include "btr/scene/scene_toml.h"
 
@@ -128,7 +129,7 @@ HeapSurfaceSampler::HeapSurfaceSampler(const Scene& scene, std::uint64_t seed, s
   double solid = 0.0;
   for (Drop& d : drops_) {
     d = sequence.next();
-    solid += dim == 3 ? 4.0 / 3.0 * M_PI * d.r * d.r * d.r : M_PI * d.r * d.r;
+    solid += grain_volume(d.r, dim);
   }
   HeapSurface& out = surface_;
   out.angle = angle;

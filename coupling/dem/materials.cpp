@@ -43,7 +43,7 @@ double effective_young(const Material& a, const Material& b) {
   return 1.0 / ((1.0 - a.poisson * a.poisson) / a.young + (1.0 - b.poisson * b.poisson) / b.young);
 }
 
-double grain_mass(double radius, double density) { return 4.0 / 3.0 * M_PI * radius * radius * radius * density; }
+double grain_mass(double radius, double density) { return grain_volume(radius, 3) * density; }
 
 std::vector<double> grain_masses(const Grains& grains, const Scene& scene) {
   std::vector<double> m(grains.size());
