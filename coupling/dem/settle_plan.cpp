@@ -131,11 +131,9 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
   c.settings.target_margin = kCalibrationMargin;  // the target is measured in the same window as the calibration
   c.settings.compaction_timestep_fraction = kSettleCompactionTimestepFraction;
   const bool yade = scene.relax.engine == "yade";
-  const double by_depth =
-      kCompactionDampingAtAnchor * std::pow(depth / kDampingAnchorDepth, kCompactionDampingExponent);
-  const double compaction_damping = yade ? kYadeCompactionDamping : std::clamp(by_depth, 0.05, 0.3);
+  const double compaction_damping = yade ? kYadeCompactionDamping : kCompactionDamping;
   c.settings.compaction_damping = compaction_damping;
-  const bool measured_range = depth >= 0.99 * kDampingAnchorDepth && depth <= 3.01 * kDampingAnchorDepth;
+  const bool measured_depth = depth >= 0.75 * kDampingAnchorDepth && depth <= 1.5 * kDampingAnchorDepth;
   const std::string depth_text = g6(depth) + " largest diameters";
   c.record = {
       {"target_phi", {{"value", target_phi}, {"from", target_from}}},
@@ -144,9 +142,9 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
         {"bed_depth_largest_diameters", depth},
         {"from", yade ? "btr settle's YADE compaction damping, measured on bed3d at 14.1 largest diameters deep "
                         "(this bed: " + depth_text + ")"
-                      : "btr settle's rule 0.15 (depth / 14.1 largest diameters)^-0.369, held within [0.05, 0.3], "
-                        "measured on bed3d at 14.1 and 42.3 largest diameters deep (this bed: " + depth_text +
-                            (measured_range ? ")" : ", outside that range: extrapolated)")}}},
+                      : "btr settle's LIGGGHTS compaction damping, measured on bed3d at " + g6(kDampingAnchorDepth) +
+                            " largest diameters deep (this bed: " + depth_text +
+                            (measured_depth ? ")" : ", away from that depth: not measured there)")}}},
       {"compaction_timestep_fraction",
        {{"value", kSettleCompactionTimestepFraction},
         {"from", "btr settle: twice the settle's fraction, measured on bed3d to give the same structure"}}},
@@ -154,7 +152,10 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
        {{"value", kCalibrationMargin},
         {"from", "the calibration's bulk window: largest diameters from the floor, walls and surface"}}},
       {"friction_scales", {{"value", scene.relax.friction_scales}, {"from", "the scene's relax.friction_scales"}}},
-      {"damping", {{"value", c.damping}, {"from", "btr settle: quasi-static settle after the compaction"}}},
+      {"damping",
+       {{"value", c.damping},
+        {"from", "btr settle: quasi-static settle after the compaction, under YADE's local damping in both engines "
+                 "(LIGGGHTS: the same law by fix addforce, so that no grain is left hanging in a pore)"}}},
       {"stop_rule", stop_rule_record(scene, c.stop_rule)},
   };
   return c;

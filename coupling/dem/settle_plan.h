@@ -60,15 +60,14 @@ struct CalibrationPlan {
 // stop ratio, max time) and material as the scene.
 CalibrationPlan calibration_plan(const Scene& scene, std::int64_t grains = 0);
 
-// The compaction damping that lands a LIGGGHTS bed's coordination on its pours' falls with the bed's depth: a deeper
-// bed's collapse lasts longer and closes more contacts at a given damping. Measured on bed3d (coupling/README.md,
-// "The calibration depends on the bed's depth"): 0.15 lands at 3 cm, 0.1 at 9 cm, which bed_depth_in_largest_diameters
-// puts at 14.1 and 42.3 largest diameters; the power law through those two points,
-// D = 0.15 (depth / 14.1 d_max)^-0.369, is settle's rule, held within [0.05, 0.3] (outside the depths it was
-// measured between it is an extrapolation, and settle.json says so).
+// LIGGGHTS' compaction damping: the value that lands bed3d's settled coordination on its pours' at 10 000 grains,
+// 3 cm = 14.1 largest diameters deep, with the settle under YADE's local damping (coupling/README.md, "Re-measured
+// with the local-damping settle"). At 42.3 largest diameters (30 000 grains) the settled coordination does not
+// follow the damping (0.045 and 0.06 give 5.662 and 5.673 against the pours' 5.520): the collapse, which runs from
+// the floor up, sets it there, so there is no depth rule; settle.json records the bed's depth and says when it
+// lies away from the one measured.
 inline constexpr double kDampingAnchorDepth = 14.1;  // largest diameters: bed3d, 10 000 grains in 3 cm x 3 cm
-inline constexpr double kCompactionDampingAtAnchor = 0.15;
-inline constexpr double kCompactionDampingExponent = -0.369;  // ln(0.1 / 0.15) / ln(3), the depths' ratio
+inline constexpr double kCompactionDamping = 0.075;
 // YADE's local damping brakes a collapse less than LIGGGHTS' viscous damping of the same value: 0.5 landed on
 // bed3d at 3 cm (docs/guide/relax.md); no depth rule has been measured for it.
 inline constexpr double kYadeCompactionDamping = 0.5;

@@ -43,7 +43,7 @@ std::string liggghts_compaction_setup(const CompactionPlan& c, int dimension) {
   return s.str();
 }
 
-std::string liggghts_compaction_loop(const CompactionPlan& c, const Grains& grains, const Scene& scene,
+std::string liggghts_compaction_loop(const CompactionPlan& c, const Scene& scene,
                                      double settle_damping, double settle_timestep, double arming_time) {
   std::ostringstream s;
   const std::string target = g17(c.target), rest = g17(c.rest_kinetic);
@@ -85,7 +85,7 @@ std::string liggghts_compaction_loop(const CompactionPlan& c, const Grains& grai
     << "velocity all set 0.0 0.0 0.0\n"
     << "set group all omegax 0.0 omegay 0.0 omegaz 0.0\n";
   if (c.damping > 0) s << "unfix " << kCompactionDampingFix << "\n";
-  if (settle_damping > 0) s << liggghts_viscous_fix("btr_damping", grains, scene, settle_damping);
+  if (settle_damping > 0) s << liggghts_local_damping_fix("btr_damping", settle_damping);
   s << "run 0 post no\n"
     << "variable btr_tarm equal ${btr_time}+" << g17(arming_time) << "\n"
     << "variable btr_armed equal 0\n\n";

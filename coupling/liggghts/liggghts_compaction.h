@@ -19,10 +19,11 @@ std::string liggghts_compaction_setup(const CompactionPlan& c, int dimension);
 // The loop: needs the variables btr_ekin, btr_kmean, btr_phi, btr_time and btr_bound, and the friction fixes
 // btr_friction (btr_rolling) of liggghts_friction_fixes. Prints "BTR-COMPACTION-END reached|not-reached
 // friction x S t = T s phi = P" (read back by liggghts_readback.cpp), then restores the friction, stops every
-// grain, swaps the compaction's damping and step for the settle's (`settle_damping`, 0 = none;
+// grain, swaps the compaction's viscous damping for the settle's YADE-style local damping and the compaction's
+// step for the settle's (`settle_damping`, 0 = none: liggghts_local_damping_fix;
 // `settle_timestep`, the run's step, which the compaction's c.timestep replaces until then) and re-arms the stop
 // rule: btr_tarm = now + arming_time, btr_armed = 0.
-std::string liggghts_compaction_loop(const CompactionPlan& c, const Grains& grains, const Scene& scene,
+std::string liggghts_compaction_loop(const CompactionPlan& c, const Scene& scene,
                                      double settle_damping, double settle_timestep, double arming_time);
 
 }  // namespace btr

@@ -317,6 +317,18 @@ std::string liggghts_viscous_fix(const std::string& id, const Grains& grains, co
   return s + "\n";
 }
 
+std::string liggghts_local_damping_fix(const std::string& id, double damping) {
+  if (!(damping > 0.0 && damping < 1.0)) throw std::invalid_argument("damping: expected a value in (0, 1)");
+  const std::string d = g17(damping);
+  std::string s = "# Damping " + g6(damping) + ": YADE's NewtonIntegrator damping itself, F_k -= damping |F_k| sign(v_k),\n"
+                  "# on the force of the contacts, walls and gravity (the fixes before this one). Unlike a viscous\n"
+                  "# drag it does not hold a free grain at a terminal velocity: a grain left in a pore falls onto its\n"
+                  "# supports (coupling/README.md).\n";
+  for (const char* k : {"x", "y", "z"})
+    s += "variable btr_local_" + std::string(k) + " atom -" + d + "*abs(f" + k + ")*((v" + k + ">0)-(v" + k + "<0))\n";
+  return s + "fix " + id + " all addforce v_btr_local_x v_btr_local_y v_btr_local_z\n";
+}
+
 std::string liggghts_snapshot_file(std::size_t k) { return "btr_rot_" + std::to_string(k) + ".dump"; }
 
 std::string liggghts_wall_id(const std::string& wall_name) {
@@ -593,8 +605,10 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
     << "variable btr_armed equal 0\n"
     << "print \"BTR time step " << g17(plan.timestep) << " s: " << plan.timestep_rule << "\"\n\n";
   if (pour.enabled) s << liggghts_release(pour);
+  // After a compaction the settle's damping is a fix addforce of atom-style variables, which needs set-up runs.
+  const bool local_damping = compaction.enabled && plan.damping > 0;
   if (compaction.enabled)
-    s << liggghts_compaction_loop(compaction, grains, scene, plan.damping, plan.timestep, stop_arming_time(grains));
+    s << liggghts_compaction_loop(compaction, scene, plan.damping, plan.timestep, stop_arming_time(grains));
   std::vector<std::string> cols{"id", "x", "y", "z", "vx", "vy", "vz"};
   for (const DemWall& w : walls)
     for (const std::string& c : wall_force_columns(w)) cols.push_back(c);
@@ -608,7 +622,7 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   else
     s << "label btr_loop\n"
     << "variable btr_check loop " << sched.max_checks << "\n"
-    << "run " << sched.steps_per_check << " pre no post no\n"
+    << "run " << sched.steps_per_check << (local_damping ? " post no\n" : " pre no post no\n")
     << "if \"${btr_ekin} > ${btr_bound}\" then &\n"
     << "  \"print 'BTR-FAILURE kinetic energy ${btr_ekin} J above the bound ${btr_bound} J at t = ${btr_time} s'\" "
        "quit\n"

@@ -10,7 +10,9 @@
 //    jump); it prints "BTR-STOP <rule> t = T s value = V" (rule: kinetic-energy, unbalanced-force or
 //    displacement) or "BTR-STOP max-time t = T s", then "BTR-FINAL unbalanced-force U atoms N";
 //  - open floors: the box is fixed laterally at the plan's removal region, lost atoms are ignored (and
-//    counted by the readback); damping (plan.damping > 0): fix viscous, liggghts_damping_gamma;
+//    counted by the readback); damping (plan.damping > 0): fix viscous, liggghts_damping_gamma, except after a
+//    compaction to a target packing fraction, where the settle runs under YADE's own local damping
+//    (liggghts_local_damping_fix; coupling/README.md says why);
 //  - the final state goes to btr_final.dump (id x y z vx vy vz and the normal force of each wall)
 //    and btr_contacts.dump (pair ids, periodic flag, normal force vector, overlap), full precision.
 #include <string>
@@ -46,6 +48,12 @@ std::string liggghts_friction_fixes(const Scene& scene, double scale = 1.0);
 
 // "fix ID all viscous ..." (with its comment): the damping `damping` as liggghts_damping_gamma computes it.
 std::string liggghts_viscous_fix(const std::string& id, const Grains& grains, const Scene& scene, double damping);
+
+// "fix ID all addforce ..." with its three atom-style variables (and comment): YADE's NewtonIntegrator damping
+// itself, each force component reduced by damping x |F_k| in the direction of motion. It must be defined after
+// every fix that adds a force (walls, gravity), and the runs after it must not be "pre no": LIGGGHTS 3.8 finds
+// the fix's variables again only when a run sets up (a "pre no" run after it crashes in Variable::compute_atom).
+std::string liggghts_local_damping_fix(const std::string& id, double damping);
 
 // Writes dir/btr.data and dir/in.btr, and for a mesh container dir/btr_mesh.stl; returns their paths.
 std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Scene& scene, const RelaxPlan& plan,

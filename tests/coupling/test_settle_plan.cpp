@@ -166,16 +166,16 @@ TEST(SettlePlan, BedDepthIsTheSolidVolumeOverTheFloorAtThePackingFraction) {
   EXPECT_NEAR(bed_depth_in_largest_diameters(g, s, 0.5), 4000.0 / 3.0 * M_PI / (M_PI * 100.0 * 0.5) / 2.0, 1e-9);
 }
 
-TEST(SettlePlan, CompactionDampingFollowsTheDepthRuleThroughItsTwoMeasuredPoints) {
+// One measured value at every depth; the record says when the bed lies away from the depth it was measured at.
+TEST(SettlePlan, CompactionDampingIsTheMeasuredValueAndSaysWhereItWasMeasured) {
   const Scene s = bed(3);
-  EXPECT_NEAR(*settle_choices(s, 0.63, {}, 14.1).settings.compaction_damping, 0.15, 1e-12);
-  EXPECT_NEAR(*settle_choices(s, 0.63, {}, 42.3).settings.compaction_damping, 0.1, 1e-3);
-  EXPECT_EQ(*settle_choices(s, 0.63, {}, 1e4).settings.compaction_damping, 0.05);  // held, not extrapolated further
-  EXPECT_EQ(*settle_choices(s, 0.63, {}, 0.1).settings.compaction_damping, 0.3);
-  const std::string from = settle_choices(s, 0.63, {}, 100.0).record["compaction_damping"]["from"];
-  EXPECT_NE(from.find("extrapolated"), std::string::npos) << from;
-  const std::string inside = settle_choices(s, 0.63, {}, 20.0).record["compaction_damping"]["from"];
-  EXPECT_EQ(inside.find("extrapolated"), std::string::npos) << inside;
+  for (double depth : {5.0, 14.1, 42.3})
+    EXPECT_EQ(*settle_choices(s, 0.63, {}, depth).settings.compaction_damping, kCompactionDamping);
+  const std::string away = settle_choices(s, 0.63, {}, 42.3).record["compaction_damping"]["from"];
+  EXPECT_NE(away.find("not measured there"), std::string::npos) << away;
+  const std::string near = settle_choices(s, 0.63, {}, 15.0).record["compaction_damping"]["from"];
+  EXPECT_EQ(near.find("not measured"), std::string::npos) << near;
+  EXPECT_NE(near.find("this bed: 15 largest diameters"), std::string::npos) << near;
 }
 
 TEST(SettlePlan, ChoicesRecordTheTargetAndWhereEachValueCameFrom) {
