@@ -53,8 +53,7 @@ std::vector<std::vector<std::size_t>> touching_clusters_in_blocks(const Grains& 
                 dimension == 3 ? static_cast<long>(std::floor((x.y() + 0.5 * c.size_y) / side)) : 0,
                 static_cast<long>(std::floor(x.z() / side))};
   }
-  double r_max = 0.0;
-  for (const Grain& g : grains) r_max = std::max(r_max, g.r);
+  const double r_max = max_radius(grains);
   UnionFind uf(grains.size());
   // Plain distances, no periodic image: the blocks cut the cell, and a cluster never spans a cut.
   const PairSearch pairs(grains, dimension, Container{}, r_max * (2.0 + std::max(contact_tol, 0.0)) * 1.0001);

@@ -46,8 +46,7 @@ void Shaker::keep_inside(double& x, double& y, double r) const {
 Grains Shaker::cycle(const Grains& grains) {
   Grains out(grains.size());
   if (grains.empty()) return out;
-  double r_max = 0.0;
-  for (const Grain& g : grains) r_max = std::max(r_max, g.r);
+  const double r_max = max_radius(grains);
   Deposition engine(dimension_, container_, r_max);
   for (std::size_t i : height_order(grains)) {
     const Grain& g = grains[i];

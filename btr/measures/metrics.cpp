@@ -14,12 +14,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-double max_radius(const Grains& grains) {
-  double r = 0.0;
-  for (const Grain& g : grains) r = std::max(r, g.r);
-  return r;
-}
-
 // ---------------------------------------------------------------- volumes
 
 // Area of the disk of radius rho about the origin inside [0, X] x [0, Y], for X, Y >= 0.

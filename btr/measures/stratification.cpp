@@ -171,8 +171,7 @@ Stratification stratification_measures(const Grains& grains, int dimension, cons
   }
   // the angle per species: the species' own skyline (its highest grain top per bin of u, bins one largest
   // diameter of the heap wide) fitted over the heap's fitted extent of each side; sides averaged
-  double r_max = 0.0;
-  for (const Grain& g : grains) r_max = std::max(r_max, g.r);
+  const double r_max = max_radius(grains);
   for (const auto& [sp, e] : by_species) {
     SpeciesAngle angle{sp, 2.0 * e.first / double(e.second), false, 0.0};
     int fitted = 0;

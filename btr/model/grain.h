@@ -1,6 +1,7 @@
 #pragma once
 // The grains of a packing: the one data structure every stage shares.
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -29,6 +30,13 @@ inline double solid_volume(const Grains& grains, int dimension) {
   double volume = 0.0;
   for (const Grain& g : grains) volume += grain_volume(g.r, dimension);
   return volume;
+}
+
+// The largest radius (0 for no grains).
+inline double max_radius(const Grains& grains) {
+  double r = 0.0;
+  for (const Grain& g : grains) r = std::max(r, g.r);
+  return r;
 }
 
 }  // namespace btr

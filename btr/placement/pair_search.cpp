@@ -15,8 +15,7 @@ constexpr double kMaxCoordinate = 4503599627370496.0;
 PairSearch::PairSearch(const Grains& grains, int dimension, const Container& container, double cutoff,
                        int cells_per_cutoff)
     : cut2_(cutoff * cutoff) {
-  double r_max = 0.0;
-  for (const Grain& g : grains) r_max = std::max(r_max, g.r);
+  const double r_max = max_radius(grains);
   // As many cells to the cut-off as asked for, but none narrower than the largest diameter (narrower
   // cells would mostly be empty).
   const int most = std::clamp(cells_per_cutoff, 1, kMaxReach);

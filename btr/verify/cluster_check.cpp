@@ -108,8 +108,7 @@ ClusterCheckReport check_clusters(const Grains& grains, int dimension, const Con
 
   // Pairs of grains of different bodies, at the minimum image.
   const MinimumImage image(c, dimension);
-  double r_max = 0.0;
-  for (const Grain& g : grains) r_max = std::max(r_max, g.r);
+  const double r_max = max_radius(grains);
   const double reach = r_max * (2.0 + contact_tol) * (1.0 + 1e-12);
   std::vector<Vec3> x(grains.size());
   for (std::size_t i = 0; i < grains.size(); ++i) x[i] = grains[i].x;

@@ -12,8 +12,7 @@ std::vector<Vec3> unwrap_clusters(const Grains& grains, int dimension, const Con
   for (std::size_t i = 0; i < grains.size(); ++i) at[i] = grains[i].x;
   const MinimumImage image(container, dimension);
   if (!image.px && !image.py) return at;
-  double r_max = 0.0;
-  for (const Grain& g : grains) r_max = std::max(r_max, g.r);
+  const double r_max = max_radius(grains);
   const double reach = 2.0 * r_max * (1.0 + 1e-6);  // touching members, with room for round-off
 
   std::vector<Vec3> x;                         // one body's members, as in the packing

@@ -29,8 +29,7 @@ std::string OverlapReport::describe() const {
 void for_each_overlap(const Grains& grains, int dimension, const Container& container,
                       const std::function<void(std::int64_t, std::int64_t, double, const DemWall*)>& f) {
   const std::vector<DemWall> walls = dem_walls(container, dimension);
-  double r_max = 0.0;
-  for (const Grain& g : grains) r_max = std::max(r_max, g.r);
+  const double r_max = max_radius(grains);
   const PairSearch pairs(grains, dimension, container, std::max(2.0 * r_max, 1e-300));
   for (std::size_t i = 0; i < grains.size(); ++i) {
     const Grain& g = grains[i];

@@ -114,8 +114,7 @@ CalibrationPlan calibration_plan(const Scene& scene, std::int64_t grains) {
 double bed_depth_in_largest_diameters(const Grains& grains, const Scene& scene, double packing_fraction) {
   const int dim = scene.dimension;
   const double solid = solid_volume(grains, dim);
-  double r_max = 0.0;
-  for (const Grain& g : grains) r_max = std::max(r_max, g.r);
+  const double r_max = max_radius(grains);
   const Container& c = scene.container;
   const double floor = c.kind == ContainerKind::Cylinder ? (dim == 3 ? M_PI * c.radius * c.radius : 2.0 * c.radius)
                        : dim == 3                        ? c.size_x * c.size_y
