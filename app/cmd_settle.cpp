@@ -8,6 +8,8 @@
 #include <iostream>
 #include <memory>
 
+#include "btr/measures/block_error.h"
+#include "btr/model/number_text.h"
 #include "btr/placement/run_scene.h"
 #include "btr/scene/scene_toml.h"
 #include "btr/scene/size_budget.h"
@@ -112,14 +114,19 @@ int run(const Options& o, const CLI::App& cmd) {
       throw btr::SceneError("--calibration-grains: the calibration pour's bulk window is empty (" + m.bulk.note +
                             "): its bed of " + std::to_string(cal.grains) + " grains is too shallow; give more");
     target = m.bulk.packing_fraction;
+    const btr::BlockError precision = btr::bulk_phi_block_error(pour.result.poured.grains, scene.dimension,
+                                                                cal.scene.container, m.bulk);
     target_from = {{"source", "calibration pour"},
                    {"grains", cal.grains},
-                   {"cell", {{"kind", "periodic"}, {"width", cal.width}, {"dimension", scene.dimension}}},
+                   {"cell", {{"kind", "periodic"}, {"width", cal.width}, {"dimension", scene.dimension},
+                             {"chosen", cal.record}}},
                    {"seed", seed},
                    {"engine", engine},
                    {"bulk_window_margin_largest_diameters", btr::kCalibrationMargin},
                    {"bulk_grains", m.bulk.grains_in_window},
                    {"bulk_coordination", m.bulk.mean_coordination},
+                   {"standard_error", {{"value", precision.standard_error},
+                                       {"from", precision.note + ": the blocks' standard deviation / sqrt(blocks)"}}},
                    {"output", "calibration/poured.csv"}};
     steps.push_back(clock.finish("calibration", pour.engine_cpu_seconds,
                                  {{"what", "periodic pour of the scene's grains and material"},
@@ -127,7 +134,8 @@ int run(const Options& o, const CLI::App& cmd) {
                                   {"bulk_packing_fraction", target},
                                   {"simulated_seconds", pour.result.run.simulated_time},
                                   {"stop_reason", pour.result.run.stop_reason}}));
-    say("target bulk packing fraction " + std::to_string(target) + " (calibration pour)");
+    say("target bulk packing fraction " + std::to_string(target) + " +- " + btr::g6(precision.standard_error) +
+        " (calibration pour; standard error from its window in blocks)");
     to_relax = btr_packing;
   }
 

@@ -96,6 +96,21 @@ CalibrationPlan calibration_plan(const Scene& scene, std::int64_t grains) {
                         : kCalibrationWidth2d * d_max;
   cell.container.size_x = plan.width;
   cell.container.size_y = dim == 3 ? plan.width : 0.0;
+  plan.record = {{"width", {{"value", plan.width},
+                            {"from", dim == 3 ? "the wider of " + g6(kCalibrationWidth3d) + " largest and " +
+                                                    g6(kCalibrationMeanDiameters3d) + " number-mean diameters"
+                                              : g6(kCalibrationWidth2d) + " largest diameters"}}}};
+  if (dim == 3 && !scene.relax.timestep && scene.relax.timestep_fraction < kCalibrationTimestepFraction3d) {
+    cell.relax.timestep_fraction = kCalibrationTimestepFraction3d;
+    plan.record["timestep_fraction"] = {
+        {"value", kCalibrationTimestepFraction3d},
+        {"from", "btr settle: the pours' packing fraction is the same at this fraction as at 0.2, for 0.58x the "
+                 "processor time (docs/guide/settle.md)"}};
+  } else {
+    plan.record["timestep_fraction"] = {
+        {"value", scene.relax.timestep ? nlohmann::json(nullptr) : nlohmann::json(scene.relax.timestep_fraction)},
+        {"from", scene.relax.timestep ? "the scene's relax.timestep" : "the scene's relax.timestep_fraction"}};
+  }
   if (grains > 0) {
     if (grains < kMinCalibrationGrains)
       throw RelaxRefused("--calibration-grains: expected at least " + std::to_string(kMinCalibrationGrains) +

@@ -19,12 +19,16 @@ inline constexpr double kCalibrationDepth = 10.0;
 // Width of the calibration cell in largest diameters: 3D square, 2D a line of this length.
 inline constexpr double kCalibrationWidth3d = 5.0;
 inline constexpr double kCalibrationWidth2d = 20.0;
-// ... and at least this many number-mean diameters in 3D: equal spheres order against a period of a few
-// diameters (a monodisperse bed's target came out 0.007 high in a cell 5 diameters wide, 0.002 at 7, against
-// its pours: docs/guide/settle.md), grains of several sizes do not; for the constant-mass law at a size ratio
-// of 2 (mean diameter 0.69 d_max) 5 largest diameters already span 7.2 mean ones, so only narrower
-// distributions widen the cell.
-inline constexpr double kCalibrationMeanDiameters3d = 7.0;
+// ... and at least this many number-mean diameters in 3D: a narrow period orders the grains and packs them
+// denser. Equal spheres: a cell 5 diameters wide came out 0.007 above pours 10 wide, 7 wide 0.002 above. A size
+// ratio of 2 (constant mass, mean diameter 0.69 d_max): pours 5 largest (7.2 mean) diameters wide came out
+// 0.0035 above pours 7 largest (10 mean) diameters wide (friction 0.3, 5 and 12 seeds; docs/guide/settle.md),
+// as the matrix's calibrations did against its 7-diameter pours, so the cell is 10 mean diameters wide.
+inline constexpr double kCalibrationMeanDiameters3d = 10.0;
+// The calibration pour's time step in 3D, as a fraction of the Rayleigh / contact time (the scene's own when
+// larger): the pours' packing fraction at 0.4 was that at 0.2 (0.6307 and 0.6308, 6 seeds each, friction 0.3,
+// docs/guide/settle.md) for 0.58x the processor time, which pays for most of the wider cell. 2D keeps the scene's.
+inline constexpr double kCalibrationTimestepFraction3d = 0.4;
 // The packing fraction the cell's grain count is sized with (a random loose packing): only the depth follows.
 inline constexpr double kCalibrationSizingPhi3d = 0.60;
 inline constexpr double kCalibrationSizingPhi2d = 0.80;
@@ -51,13 +55,15 @@ struct CalibrationPlan {
   double width = 0.0;       // m, the period along x (and y in 3D)
   double largest_diameter = 0.0;
   double mean_grain_volume = 0.0;  // m^3 (2D: m^2), exact from the scene's radius distributions
+  nlohmann::json record;           // settle.json: the cell's width and time step, and where each came from
 };
 
 // The calibration cell of a scene served by settle: periodic, kCalibrationWidth largest diameters wide (3D: and at
 // least kCalibrationMeanDiameters3d mean diameters), with the
 // count that fills it kCalibrationDepth largest diameters deep at the sizing packing fraction (or `grains`
-// when given: at least kMinCalibrationGrains). Same seed, relax section (engine, model, time-step fraction,
-// stop ratio, max time) and material as the scene.
+// when given: at least kMinCalibrationGrains). Same seed, relax section (engine, model, stop ratio, max time) and
+// material as the scene; in 3D the time-step fraction is at least kCalibrationTimestepFraction3d (a scene's
+// explicit relax.timestep is kept).
 CalibrationPlan calibration_plan(const Scene& scene, std::int64_t grains = 0);
 
 // LIGGGHTS' compaction damping: the value that lands bed3d's settled coordination on its pours' at 10 000 grains,

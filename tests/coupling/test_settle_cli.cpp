@@ -124,6 +124,11 @@ TEST_F(SettleCli, TinyBedInLiggghtsAndYade) {
     EXPECT_DOUBLE_EQ(target["value"].get<double>(), phi_cal);
     EXPECT_GT(phi_cal, 0.78);
     EXPECT_LT(phi_cal, 0.88);
+    // its precision, from the calibration's own window in blocks: a random packing's blocks differ, by less than
+    // the packing fraction itself
+    const double se = target["from"]["standard_error"]["value"].get<double>();
+    EXPECT_GT(se, 0.0);
+    EXPECT_LT(se, 0.05);
     EXPECT_NEAR(bulk_packing_fraction(settled.grains, scene, 2.0), phi_cal, 0.01);
     EXPECT_TRUE(rec["target_phi"]["reached"].get<bool>());
 

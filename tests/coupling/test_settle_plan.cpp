@@ -93,21 +93,21 @@ TEST(SettlePlan, RefusesWhatItCannotMeasureAndDynamicScenesNamingFileAndField) {
   }
 }
 
-TEST(SettlePlan, CalibrationCellOfEqualSpheresIsSevenDiametersWideAndTenDeep) {
+TEST(SettlePlan, CalibrationCellOfEqualSpheresIsTenDiametersWideAndTenDeep) {
   Scene s = bed(3);
   s.seed = 7;
   s.relax.target_phi = 0.7;  // a scene's own target is not the calibration's
   const CalibrationPlan p = calibration_plan(s);
   const double d = 2e-3, v = 4.0 / 3.0 * M_PI * 1e-9;
   EXPECT_DOUBLE_EQ(p.largest_diameter, d);
-  EXPECT_DOUBLE_EQ(p.width, 7 * d);  // 7 mean diameters beat 5 largest ones
+  EXPECT_DOUBLE_EQ(p.width, 10 * d);  // 10 mean diameters beat 5 largest ones
   EXPECT_NEAR(p.mean_grain_volume, v, 1e-24);
-  // 0.6 (7 d)^2 (10 d) / (pi d^3 / 6) = 294 / (pi / 6) = 561.5..., rounded up
-  EXPECT_EQ(p.grains, 562);
-  EXPECT_EQ(p.scene.grains.count, 562);
+  // 0.6 (10 d)^2 (10 d) / (pi d^3 / 6) = 600 / (pi / 6) = 1145.9..., rounded up
+  EXPECT_EQ(p.grains, 1146);
+  EXPECT_EQ(p.scene.grains.count, 1146);
   EXPECT_EQ(p.scene.container.kind, ContainerKind::Periodic);
-  EXPECT_DOUBLE_EQ(p.scene.container.size_x, 7 * d);
-  EXPECT_DOUBLE_EQ(p.scene.container.size_y, 7 * d);
+  EXPECT_DOUBLE_EQ(p.scene.container.size_x, 10 * d);
+  EXPECT_DOUBLE_EQ(p.scene.container.size_y, 10 * d);
   EXPECT_EQ(p.scene.source.kind, SourceSpec::Kind::Rain);
   EXPECT_FALSE(p.scene.relax.target_phi.has_value());
   EXPECT_EQ(p.scene.seed, 7u);
@@ -117,16 +117,33 @@ TEST(SettlePlan, CalibrationCellOfAWideMixtureIsFiveLargestDiametersWide) {
   Scene s = bed(3);
   RadiusSpec& r = s.grains.components[0].radius;
   r.kind = RadiusSpec::Kind::ConstantMass;
-  r.min = 0.5e-3;
+  r.min = 0.25e-3;
   r.max = 1e-3;
-  const CalibrationPlan p = calibration_plan(s);
-  // number-mean radius of the constant-mass law on [a, b]: a b ln(b / a) / (b - a) = 0.693 mm, so 7 mean
-  // diameters are 9.70 mm, under 5 largest ones (10 mm)
-  EXPECT_LT(7 * 2 * 1e-3 * std::log(2.0), 10e-3);
-  EXPECT_DOUBLE_EQ(p.width, 10e-3);
-  r.min = 0.8e-3;  // a ratio of 1.25: mean radius 0.893 mm, 7 mean diameters 12.5 mm
-  const double mean_r = 0.8e-3 * 1e-3 * std::log(1.25) / 0.2e-3;
-  EXPECT_NEAR(calibration_plan(s).width, 7 * 2 * mean_r, 1e-15);
+  // number-mean radius of the constant-mass law on [a, b]: a b ln(b / a) / (b - a) = 0.462 mm, so 10 mean
+  // diameters are 9.24 mm, under 5 largest ones (10 mm)
+  EXPECT_LT(10 * 2 * 0.25e-3 * 1e-3 * std::log(4.0) / 0.75e-3, 10e-3);
+  EXPECT_DOUBLE_EQ(calibration_plan(s).width, 10e-3);
+  r.min = 0.5e-3;  // a ratio of 2: mean radius 0.693 mm, 10 mean diameters 13.9 mm
+  const double mean_r = 0.5e-3 * 1e-3 * std::log(2.0) / 0.5e-3;
+  EXPECT_NEAR(calibration_plan(s).width, 10 * 2 * mean_r, 1e-15);
+}
+
+TEST(SettlePlan, Calibration3dStepsAtTheMeasuredFractionUnlessTheSceneAsksForMore) {
+  Scene s = bed(3);
+  ASSERT_LT(s.relax.timestep_fraction, kCalibrationTimestepFraction3d);
+  CalibrationPlan p = calibration_plan(s);
+  EXPECT_EQ(p.scene.relax.timestep_fraction, kCalibrationTimestepFraction3d);
+  EXPECT_EQ(p.record["timestep_fraction"]["value"].get<double>(), kCalibrationTimestepFraction3d);
+  s.relax.timestep_fraction = 0.5;  // a coarser step of the scene's own is kept
+  EXPECT_EQ(calibration_plan(s).scene.relax.timestep_fraction, 0.5);
+  s.relax.timestep_fraction = 0.1;
+  s.relax.timestep = 1e-6;  // so is an explicit step
+  p = calibration_plan(s);
+  EXPECT_EQ(p.scene.relax.timestep_fraction, 0.1);
+  EXPECT_EQ(p.scene.relax.timestep, 1e-6);
+  EXPECT_NE(p.record["timestep_fraction"]["from"].get<std::string>().find("relax.timestep"), std::string::npos);
+  Scene flat = bed(2);  // 2D: measured in 3D only, so the scene's
+  EXPECT_EQ(calibration_plan(flat).scene.relax.timestep_fraction, flat.relax.timestep_fraction);
 }
 
 TEST(SettlePlan, CalibrationOfA2dMixtureCountsEachComponentsArea) {

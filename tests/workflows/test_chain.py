@@ -16,9 +16,10 @@ from scenes import tiny_bed_toml
 @pytest.mark.parametrize("engine", ["liggghts", "yade"])
 def test_pipeline_with_each_engine(tmp_path, source_dir, btr_binary, engine):
     scene = tiny_bed_toml(tmp_path / "chain.toml", count=300, max_time=0.2, engine=engine)  # deep enough for a bulk window
+    # 650 calibration grains: a cell 10 mean diameters (15 mm) wide, about 5 largest diameters deep
     out = tmp_path / "out"
     p = subprocess.run([sys.executable, str(source_dir / "workflows" / "btr_workflow.py"), "pipeline", scene,
-                        "--engine", engine, "-o", str(out), "--calibration-grains", "300"],
+                        "--engine", engine, "-o", str(out), "--calibration-grains", "650"],
                        capture_output=True, text=True, timeout=300)
     assert p.returncode == 0, p.stdout + p.stderr
     assert "== settle" in p.stdout and "pipeline: done" in p.stdout  # progress lines
