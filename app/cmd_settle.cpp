@@ -8,7 +8,6 @@
 #include <iostream>
 #include <memory>
 
-#include "btr/measures/block_error.h"
 #include "btr/model/number_text.h"
 #include "btr/placement/run_scene.h"
 #include "btr/scene/scene_toml.h"
@@ -23,6 +22,7 @@
 #include "packing_meta.h"
 #include "progress.h"
 #include "settle_heap.h"
+#include "settle_target.h"
 #include "settle_steps.h"
 #include "validators.h"
 
@@ -35,6 +35,7 @@ using nlohmann::json;
 struct Options {
   std::string scene, out, engine;
   std::int64_t count = 0, calibration_grains = 0;
+  double target_error = 0.0;
   std::uint64_t seed = 0;
   int np = 1;
   double time_limit = 7200.0;
@@ -56,6 +57,9 @@ int run(const Options& o, const CLI::App& cmd) {
   const btr::CalibrationPlan cal = [&] {
     try {
       btr::check_settle_scene(scene);
+      if (heap && cmd.count("--target-error"))
+        throw btr::RelaxRefused("--target-error: a heap is judged by its angle, which its calibration (the scene "
+                                "itself, softened) gives without a packing-fraction target");
       if (heap && cmd.count("--calibration-grains"))
         throw btr::RelaxRefused("--calibration-grains: a heap's calibration pours the scene's own grains (a smaller "
                                 "heap stands at another angle); it takes no grain count");
@@ -105,37 +109,18 @@ int run(const Options& o, const CLI::App& cmd) {
   } else {
     say("2/3 calibration pour of " + std::to_string(cal.grains) + " grains in a periodic cell " +
         std::to_string(cal.width * 1e3) + " mm wide (" + engine + ")");
-    const StepClock clock;
-    btr::MetricsOptions window;
-    window.margin_diameters = btr::kCalibrationMargin;
-    const CalibrationPour pour = calibration_pour(cal.scene, engine, run_options, (out / "calibration").string(), window);
-    const btr::PackingMeasures& m = pour.measures;
-    if (!m.bulk.valid)
-      throw btr::SceneError("--calibration-grains: the calibration pour's bulk window is empty (" + m.bulk.note +
-                            "): its bed of " + std::to_string(cal.grains) + " grains is too shallow; give more");
-    target = m.bulk.packing_fraction;
-    const btr::BlockError precision = btr::bulk_phi_block_error(pour.result.poured.grains, scene.dimension,
-                                                                cal.scene.container, m.bulk);
-    target_from = {{"source", "calibration pour"},
-                   {"grains", cal.grains},
-                   {"cell", {{"kind", "periodic"}, {"width", cal.width}, {"dimension", scene.dimension},
-                             {"chosen", cal.record}}},
-                   {"seed", seed},
-                   {"engine", engine},
-                   {"bulk_window_margin_largest_diameters", btr::kCalibrationMargin},
-                   {"bulk_grains", m.bulk.grains_in_window},
-                   {"bulk_coordination", m.bulk.mean_coordination},
-                   {"standard_error", {{"value", precision.standard_error},
-                                       {"from", precision.note + ": the blocks' standard deviation / sqrt(blocks)"}}},
-                   {"output", "calibration/poured.csv"}};
-    steps.push_back(clock.finish("calibration", pour.engine_cpu_seconds,
-                                 {{"what", "periodic pour of the scene's grains and material"},
-                                  {"grains", cal.grains},
-                                  {"bulk_packing_fraction", target},
-                                  {"simulated_seconds", pour.result.run.simulated_time},
-                                  {"stop_reason", pour.result.run.stop_reason}}));
-    say("target bulk packing fraction " + std::to_string(target) + " +- " + btr::g6(precision.standard_error) +
-        " (calibration pour; standard error from its window in blocks)");
+    const CalibratedTarget calibrated =
+        calibrated_target(cal, scene.dimension, engine, run_options, out.string(), o.target_error);
+    for (const json& step : calibrated.steps) steps.push_back(step);
+    target = calibrated.phi;
+    target_from = calibrated.from;
+    say("target bulk packing fraction " + std::to_string(target) + " +- " + btr::g6(calibrated.standard_error) +
+        " (calibration pour" + (calibrated.steps.size() > 1 ? "s" : "") +
+        "; standard error from the window in blocks)");
+    if (!calibrated.error_met)
+      std::cerr << "btr settle: --target-error " << o.target_error << " not reached in " << kMaxCalibrationPours
+                << " calibration pours (standard error " << calibrated.standard_error
+                << "); settling to their mean (settle.json, chosen.target_phi.from.target_error)\n";
     to_relax = btr_packing;
   }
 
@@ -246,6 +231,11 @@ Runner add_settle_command(CLI::App& app) {
                   "beds: grains of the calibration pour (default: enough to fill its cell 10 largest diameters "
                   "deep; fewer is cheaper and noisier); heaps take none")
       ->check(positive_integer());
+  cmd->add_option("--target-error", o->target_error,
+                  "beds: pour the calibration cell again at the next seeds (at most " +
+                      std::to_string(kMaxCalibrationPours) +
+                      " pours) until the standard error of the target is at most this (default: one pour)")
+      ->check(positive_number());
   cmd->add_option("--time-limit", o->time_limit, "wall-time limit of each engine run [s]")
       ->capture_default_str()
       ->check(positive_number());

@@ -10,6 +10,7 @@
 #include <fstream>
 
 #include "btr/measures/metrics.h"
+#include "btr/model/number_text.h"
 #include "cli_run.h"
 #include "coupling/dem/overlap.h"
 #include "coupling/dem/relax_target.h"
@@ -220,6 +221,56 @@ TEST_F(SettleCli, TinyHeapInLiggghtsAndYade) {
   }
 }
 
+TEST_F(SettleCli, TargetErrorPoursTheCellAgainUntilTheTargetIsThatPrecise) {
+  if (!btr_test::have_engine("liggghts")) {
+    ADD_FAILURE() << "liggghts is not installed";
+    return;
+  }
+  const std::string scene_path = scene_file("tiny_bed", kTinyBed);
+  const fs::path one = dir_ / "one", more = dir_ / "more";
+  CliRun r = btr("settle " + scene_path + " -o " + one.string() + " --engine liggghts --quiet");
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  const nlohmann::json single = nlohmann::json::parse(slurp(one / "settle.json"))["chosen"]["target_phi"];
+  const double e1 = single["from"]["standard_error"]["value"].get<double>();
+  ASSERT_GT(e1, 0.0);
+  EXPECT_FALSE(single["from"].contains("target_error"));  // not asked: one pour
+
+  const double asked = 0.99 * e1;  // more precise than one pour gives
+  r = btr("settle " + scene_path + " -o " + more.string() + " --engine liggghts --quiet --target-error " + g17(asked));
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  const nlohmann::json rec = nlohmann::json::parse(slurp(more / "settle.json"));
+  const nlohmann::json& target = rec["chosen"]["target_phi"];
+  const nlohmann::json& asked_for = target["from"]["target_error"];
+  const int pours = asked_for["pours"].get<int>();
+  ASSERT_GE(pours, 2);
+  ASSERT_EQ(asked_for["each"].size(), static_cast<std::size_t>(pours));
+  int steps = 0;
+  for (const nlohmann::json& step : rec["steps"]) steps += step["step"] == "calibration";
+  EXPECT_EQ(steps, pours);  // every pour's cost is in the record
+
+  // the target is the mean of the pours' packing fractions, each measured here from its own packing, at
+  // consecutive seeds from the scene's; the first pour is the single-pour run's calibration
+  double sum = 0.0;
+  for (int k = 0; k < pours; ++k) {
+    const std::string folder = k == 0 ? "calibration" : "calibration_" + std::to_string(k + 1);
+    const Packing cal = read_packing((more / folder / "poured.csv").string());
+    const double phi = bulk_packing_fraction(cal.grains, scene_from_json(cal.meta["scene"], "poured.json"), 2.0);
+    EXPECT_EQ(asked_for["each"][k]["seed"].get<std::uint64_t>(), 4u + k) << folder;
+    if (k == 0) {
+      EXPECT_DOUBLE_EQ(phi, single["value"].get<double>());
+    }
+    sum += phi;
+  }
+  EXPECT_NEAR(target["value"].get<double>(), sum / pours, 1e-12);
+  // it stopped as soon as the error was small enough, or at the most pours it runs
+  const double e = target["from"]["standard_error"]["value"].get<double>();
+  if (asked_for["met"].get<bool>()) {
+    EXPECT_LE(e, asked);
+  } else {
+    EXPECT_EQ(pours, asked_for["most_pours"].get<int>());
+  }
+}
+
 TEST_F(SettleCli, RefusalsNameTheFileAndTheFieldAndWriteNothing) {
   // A 3D region source on an open floor: its heap has no axis for btr measure's angle.
   const std::string region = replaced(replaced(replaced(kTinyBed, "dimension = 2", "dimension = 3"),
@@ -238,6 +289,11 @@ TEST_F(SettleCli, RefusalsNameTheFileAndTheFieldAndWriteNothing) {
   EXPECT_EQ(r.code, 2) << r.out << r.err;
   EXPECT_NE(r.err.find("--calibration-grains"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir_ / "r2" / "settle.json"));
+
+  r = btr("settle " + scene_file("heap", tiny_heap()) + " -o " + (dir_ / "r4").string() + " --target-error 0.001");
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("--target-error"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "r4" / "settle.json"));
 
   r = btr("settle " + scene_file("few", kTinyBed) + " -o " + (dir_ / "r3").string() + " --calibration-grains 10");
   EXPECT_EQ(r.code, 2) << r.out << r.err;
