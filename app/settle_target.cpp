@@ -16,7 +16,9 @@ CalibratedTarget calibrated_target(const btr::CalibrationPlan& cal, int dimensio
   btr::MetricsOptions window;
   window.margin_diameters = btr::kCalibrationMargin;
   CalibratedTarget t;
+  const bool asked = target_error > 0.0;
   json pours = json::array();
+  std::string blocks;  // how the first pour's window was cut
   double sum = 0.0, squares = 0.0;
   for (int k = 0; k < kMaxCalibrationPours; ++k) {
     const StepClock clock;
@@ -49,27 +51,27 @@ CalibratedTarget calibrated_target(const btr::CalibrationPlan& cal, int dimensio
                                     {"bulk_packing_fraction", m.bulk.packing_fraction},
                                     {"simulated_seconds", pour.result.run.simulated_time},
                                     {"stop_reason", pour.result.run.stop_reason}}));
-    if (k == 0) t.from = {{"bulk_grains", m.bulk.grains_in_window}, {"bulk_coordination", m.bulk.mean_coordination}};
-    if (target_error > 0.0)
+    if (k == 0) blocks = e.note;
+    if (asked)
       say("calibration pour " + std::to_string(k + 1) + ": " + btr::g6(m.bulk.packing_fraction) + "; mean " +
           btr::g6(t.phi) + " +- " + btr::g6(t.standard_error) + " (asked: " + btr::g6(target_error) + ")");
-    if (!(target_error > 0.0) || t.standard_error <= target_error) break;
+    if (!asked || t.standard_error <= target_error) break;
   }
-  t.error_met = !(target_error > 0.0) || t.standard_error <= target_error;
-  t.from.update({{"source", "calibration pour"},
-                 {"grains", cal.grains},
-                 {"cell", {{"kind", "periodic"}, {"width", cal.width}, {"dimension", dimension}, {"chosen", cal.record}}},
-                 {"seed", o.seed},
-                 {"engine", engine},
-                 {"bulk_window_margin_largest_diameters", btr::kCalibrationMargin},
-                 {"standard_error",
-                  {{"value", t.standard_error},
-                   {"from", "the bulk window in blocks (2 x 2 columns x 2 layers; 2D 4 columns x 2 layers): the "
-                            "blocks' standard deviation / sqrt(blocks)" +
-                                std::string(pours.size() > 1 ? ", combined over the pours: sqrt(sum e^2) / pours"
-                                                             : "")}}},
-                 {"output", "calibration/poured.csv"}});
-  if (target_error > 0.0)
+  t.error_met = !asked || t.standard_error <= target_error;
+  t.from = {{"source", "calibration pour"},
+            {"grains", cal.grains},
+            {"cell", {{"kind", "periodic"}, {"width", cal.width}, {"dimension", dimension}, {"chosen", cal.record}}},
+            {"seed", o.seed},
+            {"engine", engine},
+            {"bulk_window_margin_largest_diameters", btr::kCalibrationMargin},
+            {"bulk_grains", pours[0]["bulk_grains"]},
+            {"bulk_coordination", pours[0]["bulk_coordination"]},
+            {"standard_error",
+             {{"value", t.standard_error},
+              {"from", blocks + ": the blocks' standard deviation / sqrt(blocks)" +
+                           std::string(pours.size() > 1 ? ", combined over the pours: sqrt(sum e^2) / pours" : "")}}},
+            {"output", "calibration/poured.csv"}};
+  if (asked)
     t.from["target_error"] = {{"asked", target_error},
                               {"met", t.error_met},
                               {"pours", pours.size()},
