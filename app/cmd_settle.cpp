@@ -131,7 +131,7 @@ int run(const Options& o, const CLI::App& cmd) {
       heap ? btr::heap_settle_choices(scene, heap_steps.angle_deg, heap_steps.angle_from)
            : btr::settle_choices(scene, target, target_from,
                                  btr::bed_depth_in_largest_diameters(btr_packing.grains, scene, target));
-  btr::Scene relax_scene = scene;
+  btr::Scene relax_scene = choices.scene;
   relax_scene.relax.stop_rule = choices.stop_rule;
   btr::RelaxSettings settings = choices.settings;
   settings.np = o.np;

@@ -81,8 +81,13 @@ inline constexpr double kCompactionDamping = 0.075;
 inline constexpr double kYadeCompactionDamping = 0.5;
 // The compaction's step as a fraction of the Rayleigh / contact time: twice the settle's 0.2, the setting
 // measured to give the same structure for 0.65x the processor time (coupling/README.md, "The compaction's time
-// step"); the settle after it keeps the scene's own step.
+// step").
 inline constexpr double kSettleCompactionTimestepFraction = 0.4;
+// The quasi-static settle after the compaction, 3D beds: the same fraction (the scene's own when coarser or
+// explicit; 2D and heaps keep the scene's). Against 0.2 on docs/settle's beds (3000 grains; friction 0.1-0.5,
+// rolling friction, size ratio 1-4, a cylinder), bed3d and a YADE bed (docs/guide/settle.md, "The settle's time
+// step"): the same bulk packing fraction to 1e-4 and coordination to 0.02, for 0.66-0.94x the relaxation's time.
+inline constexpr double kSettleTimestepFraction3d = 0.4;
 
 // The bed's depth in largest diameters: its grains' solid volume over the container's floor area (2D: width),
 // at the packing fraction the calibration measured.
@@ -90,9 +95,10 @@ double bed_depth_in_largest_diameters(const Grains& grains, const Scene& scene, 
 
 // What settle hands the relaxation: the target, the friction-reduction compaction with the damping of the rule
 // above for the bed's depth (LIGGGHTS; YADE: 0.5) and a step of 0.4 of the characteristic time, then the
-// quasi-static settle (damping 0.5) on the unbalanced-force rule. `record` (settle.json "chosen") says where each
+// quasi-static settle (damping 0.5) on the unbalanced-force rule, in 3D at the same step. `record` (settle.json "chosen") says where each
 // value came from.
 struct SettleChoices {
+  Scene scene;  // the scene the relaxation runs: the scene's own, its relax.timestep_fraction as chosen
   RelaxSettings settings;
   std::string stop_rule = "unbalanced-force";
   double damping = 0.5;

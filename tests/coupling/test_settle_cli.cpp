@@ -271,6 +271,39 @@ TEST_F(SettleCli, TargetErrorPoursTheCellAgainUntilTheTargetIsThatPrecise) {
   }
 }
 
+// 400 spheres of radius 0.45-0.5 mm rained into a periodic cell 6 mm square: a bed about 10 diameters deep.
+TEST_F(SettleCli, Bed3dSettlesAtTheCompactionsStepAndHandsTheUserTheScenesOwn) {
+  if (!btr_test::have_engine("liggghts")) {
+    ADD_FAILURE() << "liggghts is not installed";
+    return;
+  }
+  std::string body = replaced(replaced(replaced(kTinyBed, "dimension = 2", "dimension = 3"), "size = [0.03]",
+                                       "size = [0.006, 0.006]"),
+                              "count = 300", "count = 400");
+  body = replaced(body, "min = 0.4e-3, max = 0.5e-3", "min = 0.45e-3, max = 0.5e-3");
+  const std::string scene_path = scene_file("tiny_bed3d", body);
+  const fs::path out = dir_ / "settle3d";
+  // a shallow calibration cell (10 diameters wide, about 6 deep): enough for a window, and quick
+  const CliRun r = btr("settle " + scene_path + " -o " + out.string() + " --engine liggghts --quiet --calibration-grains 700");
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  const nlohmann::json rec = nlohmann::json::parse(slurp(out / "settle.json"));
+  EXPECT_EQ(rec["chosen"]["timestep_fraction"]["value"].get<double>(), kSettleTimestepFraction3d);
+  EXPECT_EQ(rec["chosen"]["compaction_timestep_fraction"]["value"].get<double>(), kSettleTimestepFraction3d);
+
+  // the relaxation ran at one step, the compaction's, through the settle after it
+  const nlohmann::json relaxed = nlohmann::json::parse(slurp(out / "relax" / "relaxed.json"));
+  const double step = relaxed["relax"]["timestep"].get<double>();
+  EXPECT_EQ(step, relaxed["target_phi"]["compaction_timestep"].get<double>());
+  // the user's own input keeps the scene's fraction, 0.2: half the step, by the same rule
+  std::ifstream in(out / "dem_input" / "in.btr");
+  std::string line;
+  double user_step = 0.0;
+  while (std::getline(in, line))
+    if (line.rfind("timestep ", 0) == 0) user_step = std::stod(line.substr(9));
+  ASSERT_GT(user_step, 0.0) << "no timestep line in dem_input/in.btr";
+  EXPECT_NEAR(step / user_step, kSettleTimestepFraction3d / 0.2, 1e-12);
+}
+
 TEST_F(SettleCli, RefusalsNameTheFileAndTheFieldAndWriteNothing) {
   // A 3D region source on an open floor: its heap has no axis for btr measure's angle.
   const std::string region = replaced(replaced(replaced(kTinyBed, "dimension = 2", "dimension = 3"),

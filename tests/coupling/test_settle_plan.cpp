@@ -204,13 +204,35 @@ TEST(SettlePlan, ChoicesRecordTheTargetAndWhereEachValueCameFrom) {
   EXPECT_EQ(c.settings.target_margin, kCalibrationMargin);
   EXPECT_EQ(c.stop_rule, "unbalanced-force");
   for (const char* key : {"target_phi", "compaction_damping", "damping", "stop_rule", "target_margin",
-                          "compaction_timestep_fraction"}) {
+                          "compaction_timestep_fraction", "timestep_fraction"}) {
     ASSERT_TRUE(c.record.contains(key)) << key;
     EXPECT_TRUE(c.record[key].contains("from")) << key;
   }
   EXPECT_EQ(c.record["target_phi"]["from"]["source"], "calibration pour");
   s.relax.engine = "yade";
   EXPECT_EQ(settle_choices(s, 0.63, {}, 15.0).settings.compaction_damping, 0.5);
+}
+
+TEST(SettlePlan, Bed3dSettlesAtTheCompactionsStepUnlessTheSceneAsksForMore) {
+  Scene s = bed(3);
+  ASSERT_LT(s.relax.timestep_fraction, kSettleTimestepFraction3d);
+  SettleChoices c = settle_choices(s, 0.63, {}, 15.0);
+  EXPECT_EQ(c.scene.relax.timestep_fraction, kSettleTimestepFraction3d);
+  EXPECT_EQ(c.record["timestep_fraction"]["value"].get<double>(), kSettleTimestepFraction3d);
+  EXPECT_EQ(c.scene.relax.timestep_fraction, *c.settings.compaction_timestep_fraction);  // one step for the run
+  EXPECT_EQ(c.scene.grains.count, s.grains.count);  // the rest of the scene as it was
+  EXPECT_EQ(c.scene.relax.stop_unbalanced_force, s.relax.stop_unbalanced_force);
+  s.relax.timestep_fraction = 0.5;  // a coarser step of the scene's own is kept
+  EXPECT_EQ(settle_choices(s, 0.63, {}, 15.0).scene.relax.timestep_fraction, 0.5);
+  s.relax.timestep_fraction = 0.1;
+  s.relax.timestep = 1e-6;  // so is an explicit step
+  c = settle_choices(s, 0.63, {}, 15.0);
+  EXPECT_EQ(c.scene.relax.timestep_fraction, 0.1);
+  EXPECT_EQ(c.scene.relax.timestep, 1e-6);
+  EXPECT_NE(c.record["timestep_fraction"]["from"].get<std::string>().find("relax.timestep"), std::string::npos);
+  const Scene flat = bed(2);  // 2D: measured in 3D only, so the scene's
+  EXPECT_EQ(settle_choices(flat, 0.85, {}, 15.0).scene.relax.timestep_fraction, flat.relax.timestep_fraction);
+  EXPECT_EQ(heap_settle_choices(bed(3), 21.0, {}).scene.relax.timestep_fraction, bed(3).relax.timestep_fraction);
 }
 
 // Four grains on the floor, four stacked on them: the mean column is two weights. Hertz on the floor (R* = r,
