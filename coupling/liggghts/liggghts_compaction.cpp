@@ -9,36 +9,51 @@ namespace btr {
 
 std::string liggghts_compaction_setup(const CompactionPlan& c, int dimension) {
   std::ostringstream s;
-  auto bound = [&](int axis, bool lo) {
-    if (c.slab || (dimension == 2 && axis == 1)) return std::string("INF");
-    return g17(lo ? c.window_lo[axis] : c.window_hi[axis]);
-  };
   const std::string zlo = g17(c.window_lo.z()), zhi = g17(c.window_hi.z());
   // LIGGGHTS 3.8's atom-style variables have no min/max: min(x, y) = (x + y - |x - y|) / 2, max likewise.
   auto max = [](const std::string& x, const std::string& y) { return "0.5*(" + x + "+" + y + "+abs(" + x + "-(" + y + ")))"; };
   auto min = [](const std::string& x, const std::string& y) { return "0.5*(" + x + "+" + y + "-abs(" + x + "-(" + y + ")))"; };
   s << "\n# Compaction to the target packing fraction: the solid fraction of the bulk window (btr measure's window of\n"
     << "# the starting packing, its top lowered by the compaction to come): each grain's part between the window's\n"
-    << "# planes, exactly (cap volumes; 2D: disk segments), of the grains whose centre lies in its lateral bounds.\n"
-    << "region btr_bulk block " << bound(0, true) << " " << bound(0, false) << " " << bound(1, true) << " "
-    << bound(1, false) << " INF INF units box\n"
-    // [a, b]: the grain's extent [z - r, z + r] clipped to the window, empty (a = b) where they do not meet
-    << "variable btr_cut_a0 atom " << max(zlo, "z-c_btr_radius") << "\n"
-    << "variable btr_cut_a atom " << min("v_btr_cut_a0", "z+c_btr_radius") << "\n"
-    << "variable btr_cut_b0 atom " << min(zhi, "z+c_btr_radius") << "\n"
-    << "variable btr_cut_b atom " << max("v_btr_cut_b0", "v_btr_cut_a") << "\n";
-  if (dimension == 3) {
-    s << "variable btr_grain_volume atom 3.1415926535897931*(c_btr_radius*c_btr_radius*(v_btr_cut_b-v_btr_cut_a)-"
-         "((v_btr_cut_b-z)^3-(v_btr_cut_a-z)^3)/3.0)\n";
-  } else {  // r^2 [u sqrt(1 - u^2) + asin u] between u = (a - z) / r and (b - z) / r, u kept in [-1, 1]
-    const std::string ua = min(max("(v_btr_cut_a-z)/c_btr_radius", "-1.0"), "1.0");
-    const std::string ub = min(max("(v_btr_cut_b-z)/c_btr_radius", "-1.0"), "1.0");
-    s << "variable btr_cut_ua atom " << ua << "\n"
-      << "variable btr_cut_ub atom " << ub << "\n"
-      << "variable btr_grain_volume atom c_btr_radius*c_btr_radius*(v_btr_cut_ub*sqrt(abs(1.0-v_btr_cut_ub^2))+"
-         "asin(v_btr_cut_ub)-v_btr_cut_ua*sqrt(abs(1.0-v_btr_cut_ua^2))-asin(v_btr_cut_ua))   # 2D: areas\n";
+    << "# planes, exactly (cap volumes; 2D: disk segments) in z, times (walled containers) the fraction of the grain\n"
+    << "# between the window's side planes in x (and y), exact where one side cuts it (near the window's edges, a\n"
+    << "# grain cut by two planes is the product's approximation). Counting whole the grains centred inside instead\n"
+    << "# misread a cylinder's window by 0.006 (docs/guide/relax.md).\n";
+  // [a, b]: the grain's extent [u - r, u + r] along axis u clipped to [lo, hi], empty (a = b) where they do not meet
+  auto cut = [&](const std::string& name, const std::string& u, const std::string& lo, const std::string& hi) {
+    s << "variable btr_cut" << name << "_a0 atom " << max(lo, u + "-c_btr_radius") << "\n"
+      << "variable btr_cut" << name << "_a atom " << min("v_btr_cut" + name + "_a0", u + "+c_btr_radius") << "\n"
+      << "variable btr_cut" << name << "_b0 atom " << min(hi, u + "+c_btr_radius") << "\n"
+      << "variable btr_cut" << name << "_b atom " << max("v_btr_cut" + name + "_b0", "v_btr_cut" + name + "_a") << "\n";
+  };
+  // the grain's part between the planes of axis u: volume (3D, pi r^2 (b - a) - pi ((b-u)^3 - (a-u)^3) / 3) or
+  // area (2D, r^2 [v sqrt(1 - v^2) + asin v] between v = (a - u) / r and (b - u) / r, v kept in [-1, 1])
+  auto part = [&](const std::string& name, const std::string& u) -> std::string {
+    const std::string a = "v_btr_cut" + name + "_a", b = "v_btr_cut" + name + "_b";
+    if (dimension == 3)
+      return "3.1415926535897931*(c_btr_radius*c_btr_radius*(" + b + "-" + a + ")-((" + b + "-" + u + ")^3-(" + a +
+             "-" + u + ")^3)/3.0)";
+    const std::string va = "v_btr_cut" + name + "_va", vb = "v_btr_cut" + name + "_vb";
+    s << "variable btr_cut" << name << "_va atom " << min(max("(" + a + "-" + u + ")/c_btr_radius", "-1.0"), "1.0") << "\n"
+      << "variable btr_cut" << name << "_vb atom " << min(max("(" + b + "-" + u + ")/c_btr_radius", "-1.0"), "1.0") << "\n";
+    return "c_btr_radius*c_btr_radius*(" + vb + "*sqrt(abs(1.0-" + vb + "^2))+asin(" + vb + ")-" + va +
+           "*sqrt(abs(1.0-" + va + "^2))-asin(" + va + "))";
+  };
+  const std::string whole = dimension == 3 ? "(4.1887902047863905*c_btr_radius^3)" : "(3.1415926535897931*c_btr_radius^2)";
+  cut("", "z", zlo, zhi);
+  std::string volume = part("", "z");
+  if (!c.slab) {
+    cut("x", "x", g17(c.window_lo.x()), g17(c.window_hi.x()));
+    s << "variable btr_frac_x atom (" << part("x", "x") << ")/" << whole << "\n";
+    volume = "(" + volume + ")*v_btr_frac_x";
+    if (dimension == 3) {
+      cut("y", "y", g17(c.window_lo.y()), g17(c.window_hi.y()));
+      s << "variable btr_frac_y atom (" << part("y", "y") << ")/" << whole << "\n";
+      volume += "*v_btr_frac_y";
+    }
   }
-  s << "compute btr_bulk_volume all reduce/region btr_bulk sum v_btr_grain_volume\n"
+  s << "variable btr_grain_volume atom " << volume << (dimension == 3 ? "\n" : "   # 2D: areas\n")
+    << "compute btr_bulk_volume all reduce sum v_btr_grain_volume\n"
     << "variable btr_phi equal c_btr_bulk_volume/" << g17(c.window_measure) << "\n";
   return s.str();
 }

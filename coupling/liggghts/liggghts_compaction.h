@@ -1,8 +1,8 @@
 #pragma once
 // The LIGGGHTS script's compaction phase (btr relax --target-phi; CompactionPlan in engine_adapter.h says what
-// it does): a region for the bulk window's lateral bounds, its packing fraction (v_btr_phi: each grain's exact
-// part between the window's planes), and the
-// loop that runs before the stop rule's loop, one block per friction scale.
+// it does): the bulk window's packing fraction (v_btr_phi: each grain's exact part between the window's planes in
+// z, times its fraction between the side planes in walled containers), and the loop that runs before the stop
+// rule's loop, one block per friction scale.
 #include <string>
 
 #include "coupling/dem/engine_adapter.h"
@@ -12,7 +12,7 @@ namespace btr {
 // The fix ID of the damping during the compaction (replaced by btr_damping, the plan's, when it ends).
 inline constexpr const char* kCompactionDampingFix = "btr_compaction_damping";
 
-// Region btr_bulk, the per-grain volume (area in 2D), compute btr_bulk_volume and variable btr_phi. Needs
+// The per-grain volume (area in 2D) in the window, compute btr_bulk_volume and variable btr_phi. Needs
 // compute btr_radius; v_btr_phi must be in the thermo output (computes are evaluated on thermo steps).
 std::string liggghts_compaction_setup(const CompactionPlan& c, int dimension);
 

@@ -382,16 +382,21 @@ def grain_part_between(z, r, a, b):
 
 
 def bulk_packing_fraction():
-    """Solid fraction (area fraction in 2D) of COMPACTION's window: each grain's part between its planes, of the
-    grains whose centre lies in its lateral bounds (the LIGGGHTS script's variable btr_phi)."""
+    """Solid fraction (area fraction in 2D) of COMPACTION's window (the LIGGGHTS script's variable btr_phi): each
+    grain's part between its planes in z, times, in walled containers, its fraction between the side planes in x
+    (and y in 3D): exact where one side cuts a grain, the product's approximation where two do."""
     c = COMPACTION
     lo, hi = c["window_lo"], c["window_hi"]
     solid = 0.0
     for _, b in present_grains():
-        p = b.state.pos
-        if not c["slab"] and not (lo[0] <= p[0] <= hi[0] and (DIMENSION == 2 or lo[1] <= p[1] <= hi[1])):
-            continue
-        solid += grain_part_between(p[2], b.shape.radius, lo[2], hi[2])
+        p, r = b.state.pos, b.shape.radius
+        part = grain_part_between(p[2], r, lo[2], hi[2])
+        if part and not c["slab"]:
+            whole = grain_part_between(0.0, r, -r, r)
+            part *= grain_part_between(p[0], r, lo[0], hi[0]) / whole
+            if DIMENSION == 3:
+                part *= grain_part_between(p[1], r, lo[1], hi[1]) / whole
+        solid += part
     return solid / c["window_measure"]
 
 
