@@ -130,7 +130,8 @@ int run(const Options& o, const CLI::App& cmd) {
   const btr::SettleChoices choices =
       heap ? btr::heap_settle_choices(scene, heap_steps.angle_deg, heap_steps.angle_from)
            : btr::settle_choices(scene, target, target_from,
-                                 btr::bed_depth_in_largest_diameters(btr_packing.grains, scene, target));
+                                 btr::bed_depth_in_largest_diameters(btr_packing.grains, scene, target),
+                                 btr::settle_target_margin(btr_packing.grains, scene, target));
   btr::Scene relax_scene = choices.scene;
   relax_scene.relax.stop_rule = choices.stop_rule;
   btr::RelaxSettings settings = choices.settings;

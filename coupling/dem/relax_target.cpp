@@ -38,6 +38,31 @@ double bulk_packing_fraction(const Grains& grains, const Scene& scene, double ma
   return b.valid ? b.packing_fraction : std::numeric_limits<double>::quiet_NaN();
 }
 
+CompactionWindow compaction_window(const Grains& grains, const Scene& scene, double margin, double target) {
+  CompactionWindow w;
+  MetricsOptions o;
+  o.margin_diameters = margin;
+  const BulkMeasures b = bulk_measures(grains, scene.dimension, scene.container, o);
+  if (!b.valid) {
+    w.why = b.note;
+    return w;
+  }
+  w.measured = true;
+  w.initial_phi = b.packing_fraction;
+  double d_max = 0.0;
+  for (const Grain& g : grains) d_max = std::max(d_max, 2.0 * g.r);
+  const double m = margin * d_max;
+  w.slab = b.slab;
+  w.lo = b.window.lo;
+  w.hi = b.window.hi;
+  if (w.initial_phi < target) w.hi.z() = (b.window.hi.z() + m) * w.initial_phi / target - m;
+  w.valid = w.hi.z() > w.lo.z();
+  if (!w.valid)
+    w.why = "the bed is too shallow to keep a bulk window through a compaction from " + g6(w.initial_phi) + " to " +
+            g6(target);
+  return w;
+}
+
 CompactionPlan plan_compaction(const Packing& packing, const Scene& scene, const RelaxSettings& settings,
                                double timestep, double kinetic_threshold) {
   CompactionPlan c;
@@ -69,25 +94,17 @@ CompactionPlan plan_compaction(const Packing& packing, const Scene& scene, const
                          "); the compaction's friction switch and stop of every grain are not written for rigid "
                          "bodies: relax without --target-phi");
 
-  MetricsOptions o;
-  o.margin_diameters = settings.target_margin;
-  const BulkMeasures b = bulk_measures(packing.grains, scene.dimension, scene.container, o);
-  if (!b.valid)
-    throw RelaxRefused("target packing fraction: the packing has no bulk window to measure (" + b.note +
+  const CompactionWindow w = compaction_window(packing.grains, scene, settings.target_margin, c.target);
+  if (!w.measured)
+    throw RelaxRefused("target packing fraction: the packing has no bulk window to measure (" + w.why +
                        "); use a smaller --target-margin or a deeper packing");
-  c.initial_phi = b.packing_fraction;
+  c.initial_phi = w.initial_phi;
   if (c.initial_phi >= c.target) return c;  // already there: no compaction
-
-  double d_max = 0.0;
-  for (const Grain& g : packing.grains) d_max = std::max(d_max, 2.0 * g.r);
-  const double m = settings.target_margin * d_max;
-  c.slab = b.slab;
-  c.window_lo = b.window.lo;
-  c.window_hi = b.window.hi;
-  c.window_hi.z() = (b.window.hi.z() + m) * c.initial_phi / c.target - m;
-  if (!(c.window_hi.z() > c.window_lo.z()))
-    throw RelaxRefused("target packing fraction: the bed is too shallow to keep a bulk window through a compaction "
-                       "from " + g6(c.initial_phi) + " to " + g6(c.target) + "; use a smaller --target-margin");
+  if (!w.valid)
+    throw RelaxRefused("target packing fraction: " + w.why + "; use a smaller --target-margin");
+  c.slab = w.slab;
+  c.window_lo = w.lo;
+  c.window_hi = w.hi;
   const double height = c.window_hi.z() - c.window_lo.z();
   const double dx = c.window_hi.x() - c.window_lo.x(), dy = c.window_hi.y() - c.window_lo.y();
   c.window_measure = scene.dimension == 3 ? dx * dy * height : dx * height;

@@ -25,12 +25,24 @@ Scene with_friction_scaled(const Scene& scene, double scale);
 // and surface); NaN if the bulk window is empty.
 double bulk_packing_fraction(const Grains& grains, const Scene& scene, double margin = MetricsOptions{}.margin_diameters);
 
+// The window the compaction watches: btr measure's bulk window of the starting packing at `margin` largest
+// diameters, its top lowered by the compaction `target` needs (a bed compacting uniformly from the floor:
+// (top + m) phi0 / target - m, m the margin in metres), so that it stays inside the bed. `measured`: the starting
+// packing has a bulk window (its packing fraction is initial_phi); `valid`: the lowered window still has a height
+// (`why` says what is missing).
+struct CompactionWindow {
+  bool measured = false, valid = false, slab = false;
+  Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
+  double initial_phi = 0.0;
+  std::string why;
+};
+CompactionWindow compaction_window(const Grains& grains, const Scene& scene, double margin, double target);
+
 // The compaction phase of a relaxation of `packing`, from settings (which override the scene's relax.target_phi,
 // friction_scales and compaction_damping). Not enabled without a target, or when the packing's bulk packing
 // fraction already reaches it (then only `target` and `initial_phi` are set). The compaction's step is
-// `timestep` (the run's) times its time-step fraction over the scene's timestep_fraction. The window is btr measure's bulk
-// window of the starting packing with its top lowered by the compaction the target needs (a bed compacting
-// uniformly from the floor: (top + m) phi0 / target - m, m the margin), so it stays inside the bed.
+// `timestep` (the run's) times its time-step fraction over the scene's timestep_fraction. The window is
+// compaction_window's at settings.target_margin.
 // Throws RelaxRefused for a target outside (0, 1), scales that are empty or not decreasing in [0, 1), a
 // compaction damping outside [0, 1), an empty bulk window, or rigid clusters.
 CompactionPlan plan_compaction(const Packing& packing, const Scene& scene, const RelaxSettings& settings,

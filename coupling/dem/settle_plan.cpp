@@ -7,6 +7,7 @@
 #include "btr/placement/drops.h"
 #include "coupling/dem/preload.h"
 #include "coupling/dem/relax_plan.h"
+#include "coupling/dem/relax_target.h"
 
 namespace btr {
 namespace {
@@ -141,12 +142,26 @@ double bed_depth_in_largest_diameters(const Grains& grains, const Scene& scene, 
   return solid / (floor * packing_fraction) / (2.0 * r_max);
 }
 
+TargetMargin settle_target_margin(const Grains& btr_grains, const Scene& scene, double target) {
+  const CompactionWindow judged = compaction_window(btr_grains, scene, kSettleTargetMargin, target);
+  if (judged.valid)
+    return {kSettleTargetMargin,
+            {{"value", kSettleTargetMargin},
+             {"from", "btr measure's bulk window (largest diameters from the floor, walls and surface), where the "
+                      "settled bed is measured: the BTR bed keeps it through the compaction"}}};
+  return {kCalibrationMargin,
+          {{"value", kCalibrationMargin},
+           {"from", "the calibration's bulk window: the BTR bed is too shallow for btr measure's " +
+                        g6(kSettleTargetMargin) + " largest diameters (" +
+                        (judged.measured ? judged.why : "no bulk window: " + judged.why) + ")"}}};
+}
+
 SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohmann::json& target_from,
-                             double depth) {
+                             double depth, const TargetMargin& margin) {
   SettleChoices c;
   c.settings.target_phi = target_phi;
   c.settings.damping = c.damping;
-  c.settings.target_margin = kCalibrationMargin;  // the target is measured in the same window as the calibration
+  c.settings.target_margin = margin.value;
   c.settings.compaction_timestep_fraction = kSettleCompactionTimestepFraction;
   c.scene = scene;
   const nlohmann::json step_record =
@@ -172,9 +187,10 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
        {{"value", kSettleCompactionTimestepFraction},
         {"from", "btr settle: twice the scene's usual 0.2, measured on bed3d to give the same structure"}}},
       {"timestep_fraction", step_record},
-      {"target_margin",
-       {{"value", kCalibrationMargin},
-        {"from", "the calibration's bulk window: largest diameters from the floor, walls and surface"}}},
+      {"target_margin", margin.record.is_null() ? nlohmann::json{{"value", margin.value},
+                                                                 {"from", "the calibration's bulk window: largest "
+                                                                          "diameters from the floor, walls and surface"}}
+                                                : margin.record},
       {"friction_scales", {{"value", scene.relax.friction_scales}, {"from", "the scene's relax.friction_scales"}}},
       {"damping",
        {{"value", c.damping},

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "coupling/dem/relax_plan.h"
+#include "coupling/dem/relax_target.h"
 #include "coupling/dem/settle_plan.h"
 
 namespace btr {
@@ -233,6 +234,42 @@ TEST(SettlePlan, Bed3dSettlesAtTheCompactionsStepUnlessTheSceneAsksForMore) {
   const Scene flat = bed(2);  // 2D: measured in 3D only, so the scene's
   EXPECT_EQ(settle_choices(flat, 0.85, {}, 15.0).scene.relax.timestep_fraction, flat.relax.timestep_fraction);
   EXPECT_EQ(heap_settle_choices(bed(3), 21.0, {}).scene.relax.timestep_fraction, bed(3).relax.timestep_fraction);
+}
+
+// A simple cubic lattice of spheres of radius 1 mm, `layers` high, filling bed(3)'s 30 mm period: packing fraction
+// pi / 6 in the bulk. To compact it to 0.65 the window's top (the surface 2 mm x layers less the margin m) sinks to
+// (top + m) (pi / 6) / 0.65 - m = 2 mm x layers x 0.8055 - m: with margin 3 (m = 6 mm) it stays above the window's
+// floor (6 mm) at 12 layers (13.3 mm) and not at 7 (5.3 mm); margin 2 (m = 4 mm) keeps 7 layers (7.3 mm over 4).
+Grains cubic_lattice(int layers) {
+  Grains g;
+  for (int k = 0; k < layers; ++k)
+    for (int i = 0; i < 15; ++i)
+      for (int j = 0; j < 15; ++j) {
+        Grain a;
+        a.x = Vec3((2 * i - 14) * 1e-3, (2 * j - 14) * 1e-3, (2 * k + 1) * 1e-3);  // the period is centred on 0
+        a.r = 1e-3;
+        g.push_back(a);
+      }
+  return g;
+}
+
+TEST(SettlePlan, CompactionWatchesTheMeasuredWindowWhereTheBedKeepsIt) {
+  const Scene s = bed(3);
+  const TargetMargin deep = settle_target_margin(cubic_lattice(12), s, 0.65);
+  EXPECT_EQ(deep.value, kSettleTargetMargin);
+  EXPECT_EQ(deep.value, MetricsOptions{}.margin_diameters);  // btr measure's own
+  EXPECT_EQ(settle_choices(s, 0.6, {}, 15.0, deep).settings.target_margin, kSettleTargetMargin);
+  EXPECT_EQ(settle_choices(s, 0.6, {}, 15.0, deep).record["target_margin"]["value"].get<double>(), kSettleTargetMargin);
+  const TargetMargin shallow = settle_target_margin(cubic_lattice(7), s, 0.65);
+  EXPECT_EQ(shallow.value, kCalibrationMargin);
+  EXPECT_NE(shallow.record["from"].get<std::string>().find("too shallow"), std::string::npos) << shallow.record;
+  EXPECT_EQ(settle_choices(s, 0.6, {}, 15.0, shallow).settings.target_margin, kCalibrationMargin);
+  // the window's own arithmetic, margin 3 at 12 layers: (18 mm + 6 mm) (pi / 6) / 0.65 - 6 mm = 13.33 mm
+  const CompactionWindow w = compaction_window(cubic_lattice(12), s, 3.0, 0.65);
+  ASSERT_TRUE(w.valid) << w.why;
+  EXPECT_NEAR(w.initial_phi, M_PI / 6.0, 1e-9);
+  EXPECT_NEAR(w.hi.z(), 24e-3 * (M_PI / 6.0) / 0.65 - 6e-3, 1e-12);
+  EXPECT_NEAR(w.lo.z(), 6e-3, 1e-12);
 }
 
 // Four grains on the floor, four stacked on them: the mean column is two weights. Hertz on the floor (R* = r,
