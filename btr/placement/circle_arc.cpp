@@ -1,6 +1,7 @@
 #include "btr/placement/circle_arc.h"
 
 #include <algorithm>
+#include <limits>
 
 namespace btr {
 
@@ -94,6 +95,67 @@ double TubeGap::curvature(double t) const {
 
 double TubeGap::max_bound() const { return a0 + std::hypot(a1, b1) + std::hypot(a2, b2); }
 
+namespace {
+
+// A span of the tube exit's branch and bound: [lo, hi] with f(lo) <= level; fhi = f(hi) (only its sign
+// against the level is ever read).
+struct Span { double lo, hi, flo, fhi; };
+
+// The bisection's own path to the first exit in s (fhi > level), found without evaluating f where the
+// sign of f at a midpoint is certain, when f is known to rise across s. A safeguarded Newton iteration
+// from x (inside s, f(x) = fx, f'(x) = dx as computed) finds the crossing to round-off; then each
+// midpoint the bisection would visit is decided against it: f(m) above the level by more than the
+// round-off of f is the bisection's "exit in [lo, m]", below it by more than that its "inside up to m"
+// (f rises, so every point of [lo, m] is below the level too, and the bisection's search of that half
+// finds nothing). Where neither is certain the function stops and the caller's bisection goes on from
+// s with real evaluations, so the result is the bisection's to the last bit. Returns true when s is
+// within tol (its lo is then the exit).
+// f' > 0 over s is the caller's proof; curve bounds |f''|; err_f and err_s bound the round-off of f and f'
+// as TubeGap computes them.
+bool replay_bisection(const TubeGap& f, Span& s, double level, double x, double fx, double dx, double curve,
+                      double err_f, double err_s, double tol) {
+  double a = s.lo, b = s.hi;
+  for (int it = 0; it < 40; ++it) {
+    if (fx > level) b = x;
+    else a = x;
+    const double F = fx - level;
+    if (std::abs(F) <= 2.0 * err_f || b - a <= 0.25 * tol) break;
+    double next = dx > 0.0 ? x - F / dx : a - 1.0;
+    if (!(next > a && next < b)) next = a + 0.5 * (b - a);
+    x = next;
+    const double c = std::cos(x), sn = std::sin(x);
+    fx = f.a0 + f.a1 * c + f.b1 * sn + f.a2 * (c * c - sn * sn) + f.b2 * (2.0 * sn * c);
+    dx = -f.a1 * sn + f.b1 * c - 2.0 * f.a2 * (2.0 * sn * c) + 2.0 * f.b2 * (c * c - sn * sn);
+  }
+  // Near x (within w) f' >= g; beyond, f still rises (f' > 0 over all of s). So f(m) - level, as computed,
+  //   is above 0 for m >= x when F - margin + g min(m - x, w) > 0,
+  //   is below 0 for m <= x (and so over all of [lo, m]) when F + margin - g min(x - m, w) < 0,
+  // with margin twice the round-off of f. As cuts on m, each widened by a relative 1e-9 and by more than
+  // the round-off of x + z:
+  const double g = 0.75 * (dx - err_s);
+  if (!(g > 0.0)) return false;
+  const double w = 0.25 * (dx - err_s) / curve;
+  const double F = fx - level, margin = 2.0 * err_f, up = (margin - F) / g, down = (margin + F) / g;
+  const double inf = std::numeric_limits<double>::infinity();
+  const double slack = 4e-16 * (1.0 + std::abs(x));
+  const double hi_cut = up < w ? x + std::max(up, 0.0) * (1.0 + 1e-9) + slack : inf;
+  const double lo_cut = down < w ? x - std::max(down, 0.0) * (1.0 + 1e-9) - slack : -inf;
+  for (;;) {
+    if (s.hi - s.lo <= tol) return true;  // s.fhi > level throughout
+    const double h = 0.5 * (s.hi - s.lo), m = s.lo + h;
+    if (m > hi_cut) {
+      s.hi = m;  // f(m) > level, as computed
+      s.fhi = inf;
+    } else if (m < lo_cut) {
+      s.lo = m;  // f <= level over [lo, m], as computed
+    } else {
+      return false;
+    }
+  }
+}
+
+}  // namespace
+
 double first_tube_exit(const CircleArc& arc, const Vec3& point, int axis, double R, double t_max) {
   constexpr double kSkip = 1e-9, kApproach = 1e-9, kTol = 1e-13;
   const TubeGap f(arc, point, axis, R);
@@ -111,19 +173,36 @@ double first_tube_exit(const CircleArc& arc, const Vec3& point, int axis, double
     return 0.0;  // starts outside (not reached by a path that was inside before)
   }
   // Leftmost-first branch and bound over [a, t_max]: intervals [lo, hi] with f(lo) <= level on a stack.
-  struct Span { double lo, hi, flo, fhi; };
   Span stack[200];
   int n = 0;
   if (a >= t_max) return -1.0;
   // Just past a skipped tangency f may still be a round-off above 0 while heading in: an exit is then
   // where f rises above that level again.
   const double level = std::max(0.0, fa);
+  // Bounds of the round-off of f and f' as TubeGap computes them: with cos and sin within 1 ulp and u =
+  // 2^-53, f is within 6 u (|a0| + |a1| + |b1| + 2 |a2| + 2 |b2|) and f' within 6 u (|a1| + |b1| + 4 |a2| +
+  // 4 |b2|) (the products' errors and the four additions'); taken 3 times that. And |f''| a hair above its bound.
+  const double s1 = std::abs(f.a1) + std::abs(f.b1), s2 = std::abs(f.a2) + std::abs(f.b2);
+  const double err_f = 2e-15 * (std::abs(f.a0) + s1 + 2.0 * s2), err_s = 2e-15 * (s1 + 4.0 * s2);
+  const double curve = second * (1.0 + 1e-12);
+  bool replayed = false;
   stack[n++] = {a, t_max, fa, f.value(t_max)};
   while (n > 0) {
     Span s = stack[--n];
     for (;;) {
       if (s.fhi > level && s.hi - s.lo <= kTol) return s.lo;
       const double h = 0.5 * (s.hi - s.lo), m = s.lo + h, fm = f.value(m);
+      if (!replayed && s.fhi > level) {
+        // The first exit is in (lo, hi]. Where f provably rises across the span (so the exit is its only
+        // crossing), the bisection's path to it is replayed from a Newton iteration (same result). The
+        // span reaches at most h plus the round-off of m from m.
+        const double dm = f.slope(m);
+        if (dm - err_s - curve * (h + 4e-16 * (1.0 + m)) > 0.0) {
+          replayed = true;
+          if (replay_bisection(f, s, level, m, fm, dm, curve, err_f, err_s, kTol)) return s.lo;
+          continue;  // the bisection goes on from where the replay could not decide
+        }
+      }
       if (fm > level) {  // an exit in [lo, m]: the first one is there
         s = {s.lo, m, s.flo, fm};
         continue;

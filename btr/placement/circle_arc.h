@@ -84,6 +84,10 @@ struct TubeGap {
 // on f with a bound of |f''|, so a grazing exit is never stepped over; t is the last point inside, to
 // 1e-13. A start on the surface (|f(0)| <= 1e-9 R^2) is an exit at 0 if the arc heads out (slope, or
 // zero slope and curving out); otherwise that tangency is skipped as for grains. Negative: none.
+// Once a bisection interval holds the exit and f provably rises across it (f' at its middle beats the
+// |f''| bound times its half-width), the rest of the bisection's path is replayed from a Newton root,
+// with f evaluated only at the midpoints within its round-off of the root: the same t to the last bit,
+// with about 8 evaluations of f a call instead of about 60 (a drum revolution's average).
 double first_tube_exit(const CircleArc& arc, const Vec3& point, int axis, double R, double t_max);
 
 }  // namespace btr
