@@ -101,8 +101,9 @@ double bed_depth_in_largest_diameters(const Grains& grains, const Scene& scene, 
 // walls and surface), where the settled bed is measured and judged, when the BTR bed keeps one through the
 // compaction; else the calibration's (kCalibrationMargin). The settled bed is not uniform in height (its collapse
 // runs from the floor up), so the band between 2 and 3 diameters from the floor and the surface can read denser or
-// looser than the bulk: watched in the calibration's window, the judged one missed the target by up to 0.004 on
-// docs/settle's beds; in its own, by at most 0.0011 (docs/guide/settle.md, "The window the compaction watches").
+// looser than the bulk: watched in the calibration's window, the judged one missed the target by -0.0036 to +0.0035
+// on docs/settle's beds; watched in its own, it lands 0.0000-0.0017 above it (docs/guide/settle.md, "The window
+// the compaction watches").
 inline constexpr double kSettleTargetMargin = 3.0;
 struct TargetMargin {
   double value = kCalibrationMargin;
