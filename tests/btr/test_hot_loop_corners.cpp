@@ -16,6 +16,7 @@
 #include "btr/placement/obstacle.h"
 #include "btr/verify/check.h"
 #include "containers.h"
+#include "random_arcs.h"
 
 namespace btr {
 namespace {
@@ -183,20 +184,10 @@ TEST(HotLoopCorners, TubeExitAtTheEndOfAnArcIsFound) {
 TEST(HotLoopCorners, TubeExitAgreesWithDenseSampling) {
   // Random arcs about a unit tube (axis z): the exit found is the first crossing that 20000 samples see,
   // to a sample spacing, and never later than it.
-  std::uint64_t state = 12345;
-  auto uniform = [&] {
-    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-    return double(state >> 11) * 0x1.0p-53;
-  };
+  btr_test::UniformDraws uniform{12345};
   int exits = 0;
   for (int trial = 0; trial < 300; ++trial) {
-    CircleArc arc;
-    arc.C = Vec3(1.6 * uniform() - 0.8, 1.6 * uniform() - 0.8, uniform());
-    arc.rho = 0.05 + 0.5 * uniform();
-    const Vec3 u = Vec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5).normalized();
-    arc.u = u;
-    arc.v = (Vec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5).cross(u)).normalized();
-    arc.t_end = kTwoPi * uniform();
+    const CircleArc arc = btr_test::arc_about_unit_tube(uniform);
     auto f = [&](double t) { return std::hypot(arc.at(t).x(), arc.at(t).y()) - 1.0; };
     if (f(0.0) >= 0.0) continue;
     const int samples = 20000;

@@ -8,6 +8,7 @@
 #include <cstdint>
 
 #include "btr/placement/circle_arc.h"
+#include "random_arcs.h"
 
 namespace btr {
 namespace {
@@ -154,11 +155,7 @@ TEST(TubeExit, SameBitsAsTheBisectionOnDrumArcs) {
   // Arcs like a drum step's rolls (drum radius 23 mm, grains 0.8-1 mm: arcs of radius 1.6-2 mm about a
   // support near the wall, any orientation, up to half a turn, and some cut short by an event): the exit
   // is the bisection's to the last bit, whether it is found by the replay or not.
-  std::uint64_t state = 2026112722;
-  auto uniform = [&] {
-    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-    return double(state >> 11) * 0x1.0p-53;
-  };
+  btr_test::UniformDraws uniform{2026112722};
   const Vec3 axis(0.0, 0.0, 0.0231);
   int exits = 0, trials = 0;
   for (int trial = 0; trial < 20000; ++trial) {
@@ -183,20 +180,10 @@ TEST(TubeExit, SameBitsAsTheBisectionOnDrumArcs) {
 
 TEST(TubeExit, SameBitsAsTheBisectionOnRandomArcs) {
   // The arcs of TubeExitAgreesWithDenseSampling (unit tube, any size up to half the tube), many more.
-  std::uint64_t state = 12345;
-  auto uniform = [&] {
-    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-    return double(state >> 11) * 0x1.0p-53;
-  };
+  btr_test::UniformDraws uniform{12345};
   int exits = 0;
   for (int trial = 0; trial < 20000; ++trial) {
-    CircleArc arc;
-    arc.C = Vec3(1.6 * uniform() - 0.8, 1.6 * uniform() - 0.8, uniform());
-    arc.rho = 0.05 + 0.5 * uniform();
-    const Vec3 u = Vec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5).normalized();
-    arc.u = u;
-    arc.v = (Vec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5).cross(u)).normalized();
-    arc.t_end = kTwoPi * uniform();
+    const CircleArc arc = btr_test::arc_about_unit_tube(uniform);
     const double expected = bisection_tube_exit(arc, Vec3::Zero(), 2, 1.0, arc.t_end);
     if (expected > 0.0) ++exits;
     ASSERT_EQ(first_tube_exit(arc, Vec3::Zero(), 2, 1.0, arc.t_end), expected) << "trial " << trial;
