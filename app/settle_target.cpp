@@ -20,6 +20,10 @@ CalibratedTarget calibrated_target(const btr::CalibrationPlan& cal, int dimensio
   json pours = json::array();
   std::string blocks;  // how the first pour's window was cut
   double sum = 0.0, squares = 0.0;
+  // A previous settle into this folder may have poured more cells: its extra folders would sit beside this run's
+  // as if they were part of it.
+  for (int k = 1; k < kMaxCalibrationPours; ++k)
+    std::filesystem::remove_all(std::filesystem::path(out) / ("calibration_" + std::to_string(k + 1)));
   for (int k = 0; k < kMaxCalibrationPours; ++k) {
     const StepClock clock;
     SettleRunOptions run = o;

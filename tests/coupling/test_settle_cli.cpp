@@ -228,8 +228,11 @@ TEST_F(SettleCli, TargetErrorPoursTheCellAgainUntilTheTargetIsThatPrecise) {
   }
   const std::string scene_path = scene_file("tiny_bed", kTinyBed);
   const fs::path one = dir_ / "one", more = dir_ / "more";
+  fs::create_directories(one / "calibration_3");  // as a previous settle with --target-error would have left it
+  std::ofstream(one / "calibration_3" / "poured.csv") << "id,x,y,z,radius,species\n";
   CliRun r = btr("settle " + scene_path + " -o " + one.string() + " --engine liggghts --quiet");
   ASSERT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_FALSE(fs::exists(one / "calibration_3")) << "a stale calibration folder left beside this run's one pour";
   const nlohmann::json single = nlohmann::json::parse(slurp(one / "settle.json"))["chosen"]["target_phi"];
   const double e1 = single["from"]["standard_error"]["value"].get<double>();
   ASSERT_GT(e1, 0.0);
