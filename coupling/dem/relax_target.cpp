@@ -6,6 +6,7 @@
 #include <limits>
 #include <string>
 
+#include "btr/model/grain.h"
 #include "btr/model/number_text.h"
 #include "coupling/dem/relax_plan.h"
 
@@ -49,9 +50,7 @@ CompactionWindow compaction_window(const Grains& grains, const Scene& scene, dou
   }
   w.measured = true;
   w.initial_phi = b.packing_fraction;
-  double d_max = 0.0;
-  for (const Grain& g : grains) d_max = std::max(d_max, 2.0 * g.r);
-  const double m = margin * d_max;
+  const double m = margin * 2.0 * max_radius(grains);
   w.slab = b.slab;
   w.lo = b.window.lo;
   w.hi = b.window.hi;

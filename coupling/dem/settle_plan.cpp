@@ -187,10 +187,7 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
        {{"value", kSettleCompactionTimestepFraction},
         {"from", "btr settle: twice the scene's usual 0.2, measured on bed3d to give the same structure"}}},
       {"timestep_fraction", step_record},
-      {"target_margin", margin.record.is_null() ? nlohmann::json{{"value", margin.value},
-                                                                 {"from", "the calibration's bulk window: largest "
-                                                                          "diameters from the floor, walls and surface"}}
-                                                : margin.record},
+      {"target_margin", margin.record},
       {"friction_scales", {{"value", scene.relax.friction_scales}, {"from", "the scene's relax.friction_scales"}}},
       {"damping",
        {{"value", c.damping},

@@ -107,7 +107,9 @@ double bed_depth_in_largest_diameters(const Grains& grains, const Scene& scene, 
 inline constexpr double kSettleTargetMargin = 3.0;
 struct TargetMargin {
   double value = kCalibrationMargin;
-  nlohmann::json record;  // settle.json "chosen.target_margin" (null: the calibration's)
+  nlohmann::json record = {{"value", kCalibrationMargin},  // settle.json "chosen.target_margin"
+                           {"from", "the calibration's bulk window: largest diameters from the floor, walls and "
+                                    "surface"}};
 };
 TargetMargin settle_target_margin(const Grains& btr_grains, const Scene& scene, double target);
 
