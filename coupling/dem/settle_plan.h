@@ -140,7 +140,8 @@ inline constexpr double kHeapCalibrationColumnOverlap = 0.04;
 // bulk packing fraction of beds, 3D and 2D).
 inline constexpr double kHeapSurfacePackingFraction3d = 0.58;
 inline constexpr double kHeapSurfacePackingFraction2d = 0.80;
-// Independent draws of the drop positions built; the heap whose fitted flank is nearest the target is kept.
+// Independent draws of the drop positions built in each of two rounds: over the target angle, then over the target
+// less the first round's mean bias; the heap whose fitted flank is nearest the target is kept.
 inline constexpr int kHeapDraws = 8;
 
 struct HeapCalibrationPlan {

@@ -189,14 +189,31 @@ TEST_F(SettleCli, TinyHeapInLiggghtsAndYade) {
     EXPECT_GT(angle, 5.0);
     EXPECT_LT(angle, 45.0);  // a poured heap, far below the BTR heap's slope
 
-    // The BTR heap kept is the draw whose flank is nearest the calibration's, and it is the one written.
+    // Two rounds of draws: over the calibration's angle, then over that angle less the first round's mean bias
+    // (recomputed here from the recorded flanks). The BTR heap kept is the draw of either round whose flank is
+    // nearest the calibration's, and it is the one written.
     const nlohmann::json& build = rec["steps"][2];
-    ASSERT_EQ(build["draws_angle_deg"].size(), static_cast<std::size_t>(kHeapDraws));
-    const double kept = build["built_angle_deg"].get<double>();
-    for (const nlohmann::json& a : build["draws_angle_deg"])
+    ASSERT_EQ(build["rounds"].size(), 2u) << build.dump();
+    EXPECT_DOUBLE_EQ(build["rounds"][0]["surface_angle_deg"].get<double>(), angle);
+    double sum = 0.0;
+    int valid = 0;
+    for (const nlohmann::json& a : build["rounds"][0]["draws_angle_deg"])
       if (!a.is_null()) {
-        EXPECT_LE(std::abs(kept - angle), std::abs(a.get<double>() - angle) + 1e-12);
+        sum += a.get<double>();
+        ++valid;
       }
+    ASSERT_GT(valid, 0);
+    const double bias = sum / valid - angle;
+    EXPECT_NEAR(build["correction"]["bias_deg"].get<double>(), bias, 1e-9);
+    EXPECT_NEAR(build["rounds"][1]["surface_angle_deg"].get<double>(), angle - bias, 1e-9);
+    const double kept = build["built_angle_deg"].get<double>();
+    for (const nlohmann::json& round : build["rounds"]) {
+      ASSERT_EQ(round["draws_angle_deg"].size(), static_cast<std::size_t>(kHeapDraws));
+      for (const nlohmann::json& a : round["draws_angle_deg"])
+        if (!a.is_null()) {
+          EXPECT_LE(std::abs(kept - angle), std::abs(a.get<double>() - angle) + 1e-12);
+        }
+    }
 
     // The settled heap: the BTR heap's grains (same radii in id order, none lost on this small floor), at the
     // scene's own stiffness, standing near the calibrated angle, and far flatter than the plain BTR heap.
