@@ -59,6 +59,9 @@ class Deposition {
   // A hint that `drop` is placed `ahead` drops from now (2, 1 or 0 for the next): the memory its fall
   // reads starts loading while the current grain is placed. No effect on any result.
   void prefetch(const Drop& drop, int ahead) const;
+  // A hint that about `grains` grains will be placed in all: their array is allocated once (in 2 MiB pages
+  // when large). No effect on any result.
+  void reserve(std::int64_t grains);
 
   const Grains& grains() const;
   // Hands the placed grains over (the engine is empty afterwards); saves a copy of a large packing.

@@ -2,13 +2,63 @@
 
 #include "btr/scene/size_budget.h"
 
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
+
 #include <algorithm>
+#include <cstdint>
 #include <limits>
+#include <new>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 
 namespace btr {
+
+namespace {
+constexpr std::size_t kHugePage = std::size_t(2) << 20;
+std::size_t round_up(std::size_t n, std::size_t to) { return (n + to - 1) / to * to; }
+}  // namespace
+
+void* allocate_large_pages(std::size_t bytes) {
+#if defined(__linux__)
+  if (bytes >= kLargePageBytes) {
+    // Map 2 MiB more than asked, keep a 2 MiB-aligned span of the rounded size and unmap the rest.
+    const std::size_t size = round_up(bytes, kHugePage);
+    void* raw = ::mmap(nullptr, size + kHugePage, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (raw == MAP_FAILED) throw std::bad_alloc();
+    const auto base = reinterpret_cast<std::uintptr_t>(raw);
+    const std::uintptr_t aligned = round_up(base, kHugePage);
+    if (aligned > base) ::munmap(raw, aligned - base);
+    if (base + kHugePage > aligned) ::munmap(reinterpret_cast<void*>(aligned + size), base + kHugePage - aligned);
+    ::madvise(reinterpret_cast<void*>(aligned), size, MADV_HUGEPAGE);
+    return reinterpret_cast<void*>(aligned);
+  }
+#endif
+  return ::operator new(bytes);
+}
+
+void free_large_pages(void* p, std::size_t bytes) noexcept {
+#if defined(__linux__)
+  if (bytes >= kLargePageBytes) {
+    ::munmap(p, round_up(bytes, kHugePage));
+    return;
+  }
+#endif
+  ::operator delete(p);
+}
+
+void advise_large_pages(void* p, std::size_t bytes) noexcept {
+#if defined(__linux__)
+  if (bytes < kLargePageBytes) return;
+  const auto begin = round_up(reinterpret_cast<std::uintptr_t>(p), kHugePage);
+  const auto end = (reinterpret_cast<std::uintptr_t>(p) + bytes) / kHugePage * kHugePage;
+  if (end > begin) ::madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
+#else
+  (void)p, (void)bytes;
+#endif
+}
 
 NeighbourGrid::NeighbourGrid(int dimension, const Container& c, double r_max)
     : dimension_(dimension), wrap_x_(wraps_x(c)), wrap_y_(wraps_y(c, dimension)), grows_(c.kind == ContainerKind::Open),
@@ -146,7 +196,7 @@ void NeighbourGrid::grow_to(long ix, long iy) {
         << "): a drop far away from all the other grains";
     throw std::length_error(why.str());
   }
-  std::vector<Column> grown(static_cast<std::size_t>(new_nx * new_ny));
+  std::vector<Column, LargePageAllocator<Column>> grown(static_cast<std::size_t>(new_nx * new_ny));
   for (long y = iy0_; y < iy0_ + ny_; ++y)
     for (long x = ix0_; x < ix0_ + nx_; ++x)
       grown[(x - new_ix0) + new_nx * (y - new_iy0)] = std::move(columns_[column_of(x, y)]);
