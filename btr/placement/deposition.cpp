@@ -780,6 +780,7 @@ void Deposition::reserve(std::int64_t n) {
   if (n <= 0 || static_cast<std::size_t>(n) <= g.capacity()) return;
   g.reserve(static_cast<std::size_t>(n));
   advise_large_pages(g.data(), g.capacity() * sizeof(Grain));
+  impl_->grid.reserve(n - static_cast<std::int64_t>(g.size()));
 }
 const Grains& Deposition::grains() const { return impl_->grains; }
 Grains Deposition::release() {

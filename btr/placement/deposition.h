@@ -60,7 +60,8 @@ class Deposition {
   // reads starts loading while the current grain is placed. No effect on any result.
   void prefetch(const Drop& drop, int ahead) const;
   // A hint that about `grains` grains will be placed in all: their array is allocated once (in 2 MiB pages
-  // when large). No effect on any result.
+  // when large) and the neighbour grid's columns get room for their share (NeighbourGrid::reserve).
+  // No effect on any result.
   void reserve(std::int64_t grains);
 
   const Grains& grains() const;

@@ -60,6 +60,42 @@ void advise_large_pages(void* p, std::size_t bytes) noexcept {
 #endif
 }
 
+GridArena::~GridArena() {
+  for (const Chunk& c : chunks_) free_large_pages(c.base, c.bytes);
+}
+
+void* GridArena::allocate(std::size_t bytes) {
+  const std::size_t b = std::max<std::size_t>(8, round_up(bytes, 8));
+  if (b > kMaxBlock) return ::operator new(b);
+  if (free_.empty()) free_.assign(kMaxBlock / 8 + 1, nullptr);
+  if (void* p = free_[b / 8]) {
+    free_[b / 8] = *static_cast<void**>(p);
+    return p;
+  }
+  if (static_cast<std::size_t>(end_ - next_) < b) {
+    // Chunks from 256 KiB, doubling up to 32 MiB (from 4 MiB on in 2 MiB pages); the rest of the last one is left.
+    const std::size_t bytes_chunk = chunks_.empty() ? std::size_t(256) << 10
+                                                    : std::min(2 * chunks_.back().bytes, std::size_t(32) << 20);
+    void* base = allocate_large_pages(bytes_chunk);
+    chunks_.push_back({base, bytes_chunk});
+    next_ = static_cast<char*>(base);
+    end_ = next_ + bytes_chunk;
+  }
+  void* p = next_;
+  next_ += b;
+  return p;
+}
+
+void GridArena::deallocate(void* p, std::size_t bytes) noexcept {
+  const std::size_t b = std::max<std::size_t>(8, round_up(bytes, 8));
+  if (b > kMaxBlock) {
+    ::operator delete(p);
+    return;
+  }
+  *static_cast<void**>(p) = free_[b / 8];
+  free_[b / 8] = p;
+}
+
 NeighbourGrid::NeighbourGrid(int dimension, const Container& c, double r_max)
     : dimension_(dimension), wrap_x_(wraps_x(c)), wrap_y_(wraps_y(c, dimension)), grows_(c.kind == ContainerKind::Open),
       h_(2.0 * r_max) {
@@ -103,7 +139,7 @@ NeighbourGrid::NeighbourGrid(int dimension, const Container& c, double r_max)
       break;
   }
   if (dimension == 2) { y0_ = -0.5 * h_; iy0_ = 0; ny_ = 1; hy_ = h_; }
-  columns_.resize(static_cast<std::size_t>(nx_ * ny_));
+  columns_.assign(static_cast<std::size_t>(nx_ * ny_), Column(arena_.get()));
 }
 
 namespace {
@@ -170,6 +206,15 @@ void NeighbourGrid::prefetch(double x, double y, double reach, double z, int sta
   }
 }
 
+void NeighbourGrid::reserve(std::int64_t n) {
+  if (grows_ || n <= 0) return;
+  const double share = 1.25 * double(n) / double(columns_.size());
+  if (share < 2.0 || share > 1e6) return;
+  const auto room = static_cast<std::size_t>(std::ceil(share));
+  for (Column& c : columns_)
+    if (c.entries.capacity() < room) c.entries.reserve(room);
+}
+
 // An open floor's grid grows towards the column that is outside it, on that side only, at least
 // doubling its extent on that axis (amortised constant cost per grain as a heap spreads). A grid that
 // would exceed its budget (a grain dropped far from all the others) is refused, not allocated.
@@ -196,7 +241,7 @@ void NeighbourGrid::grow_to(long ix, long iy) {
         << "): a drop far away from all the other grains";
     throw std::length_error(why.str());
   }
-  std::vector<Column, LargePageAllocator<Column>> grown(static_cast<std::size_t>(new_nx * new_ny));
+  std::vector<Column, LargePageAllocator<Column>> grown(static_cast<std::size_t>(new_nx * new_ny), Column(arena_.get()));
   for (long y = iy0_; y < iy0_ + ny_; ++y)
     for (long x = ix0_; x < ix0_ + nx_; ++x)
       grown[(x - new_ix0) + new_nx * (y - new_iy0)] = std::move(columns_[column_of(x, y)]);

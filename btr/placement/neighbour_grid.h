@@ -5,6 +5,8 @@
 // An open floor has no footprint: the grid grows as the heap spreads.
 #include <cmath>
 #include <cstdint>
+#include <memory>
+#include <type_traits>
 #include <vector>
 
 #include "btr/model/container.h"
@@ -33,6 +35,42 @@ struct LargePageAllocator {
   friend bool operator!=(const LargePageAllocator&, const LargePageAllocator&) { return false; }
 };
 
+// The grid's column storage: blocks bumped from large chunks (in 2 MiB pages, allocate_large_pages), a block
+// freed kept on a list of its exact size for the next block of that size. Blocks over kMaxBlock bytes come
+// from operator new.
+class GridArena {
+ public:
+  GridArena() = default;
+  GridArena(const GridArena&) = delete;
+  GridArena& operator=(const GridArena&) = delete;
+  ~GridArena();
+  void* allocate(std::size_t bytes);
+  void deallocate(void* p, std::size_t bytes) noexcept;
+
+ private:
+  static constexpr std::size_t kMaxBlock = std::size_t(64) << 10;
+  struct Chunk { void* base; std::size_t bytes; };
+  std::vector<Chunk> chunks_;
+  char* next_ = nullptr;
+  char* end_ = nullptr;
+  std::vector<void*> free_;  // free_[bytes / 8]: free blocks of that size, linked through their first word
+};
+
+template <class T>
+struct ArenaAllocator {
+  using value_type = T;
+  using propagate_on_container_move_assignment = std::true_type;
+  using propagate_on_container_swap = std::true_type;
+  GridArena* arena;
+  explicit ArenaAllocator(GridArena* a) noexcept : arena(a) {}
+  template <class U>
+  ArenaAllocator(const ArenaAllocator<U>& o) noexcept : arena(o.arena) {}
+  T* allocate(std::size_t n) { return static_cast<T*>(arena->allocate(n * sizeof(T))); }
+  void deallocate(T* p, std::size_t n) noexcept { arena->deallocate(p, n * sizeof(T)); }
+  friend bool operator==(const ArenaAllocator& a, const ArenaAllocator& b) { return a.arena == b.arena; }
+  friend bool operator!=(const ArenaAllocator& a, const ArenaAllocator& b) { return a.arena != b.arena; }
+};
+
 class NeighbourGrid {
  public:
   NeighbourGrid(int dimension, const Container& container, double r_max);
@@ -52,6 +90,10 @@ class NeighbourGrid {
   // layer tables, stage 2 for the entries of the two layers at z; a caller issues the stages for a
   // drop two, one and zero steps ahead, so each stage finds the memory the one before asked for.
   void prefetch(double x, double y, double reach, double z, int stage) const;
+
+  // A hint that about n grains will be inserted in all: a fixed footprint's columns get room for 5/4 of their
+  // mean share at once, so that few of them grow (and leave their old blocks behind). No effect on any result.
+  void reserve(std::int64_t n);
 
   // Columns held (an open floor grows them as the heap spreads).
   std::size_t column_count() const { return columns_.size(); }
@@ -101,10 +143,12 @@ class NeighbourGrid {
   // The cells of one column stored contiguously, layer after layer, each in insertion order: a query
   // over a run of layers reads one block of memory instead of one heap block per cell.
   struct Column {
-    std::vector<std::uint32_t> start;  // layer iz holds entries [start[iz], start[iz + 1]); empty: no layer
-    std::vector<Entry> entries;
+    explicit Column(GridArena* a) : start(ArenaAllocator<std::uint32_t>(a)), entries(ArenaAllocator<Entry>(a)) {}
+    std::vector<std::uint32_t, ArenaAllocator<std::uint32_t>> start;  // layer iz holds entries [start[iz], start[iz + 1]); empty: no layer
+    std::vector<Entry, ArenaAllocator<Entry>> entries;
     long layers() const { return start.empty() ? 0 : static_cast<long>(start.size()) - 1; }
   };
+  std::unique_ptr<GridArena> arena_ = std::make_unique<GridArena>();  // before columns_: outlives them
   std::vector<Column, LargePageAllocator<Column>> columns_;
 };
 
