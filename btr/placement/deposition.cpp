@@ -775,12 +775,12 @@ void Deposition::prefetch(const Drop& drop, int ahead) const {
   d.grid.prefetch(drop.x, d.dimension == 3 ? drop.y : 0.0, drop.r + d.r_max,
                   std::isnan(drop.z) ? std::numeric_limits<double>::infinity() : drop.z + drop.r + d.r_max, 2 - ahead);
 }
-void Deposition::reserve(std::int64_t n) {
+void Deposition::reserve(std::int64_t n, bool evenly) {
   Grains& g = impl_->grains;
   if (n <= 0 || static_cast<std::size_t>(n) <= g.capacity()) return;
   g.reserve(static_cast<std::size_t>(n));
   advise_large_pages(g.data(), g.capacity() * sizeof(Grain));
-  impl_->grid.reserve(n - static_cast<std::int64_t>(g.size()));
+  if (evenly) impl_->grid.reserve(n - static_cast<std::int64_t>(g.size()));
 }
 const Grains& Deposition::grains() const { return impl_->grains; }
 Grains Deposition::release() {

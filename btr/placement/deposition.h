@@ -60,9 +60,9 @@ class Deposition {
   // reads starts loading while the current grain is placed. No effect on any result.
   void prefetch(const Drop& drop, int ahead) const;
   // A hint that about `grains` grains will be placed in all: their array is allocated once (in 2 MiB pages
-  // when large) and the neighbour grid's columns get room for their share (NeighbourGrid::reserve).
-  // No effect on any result.
-  void reserve(std::int64_t grains);
+  // when large), and when they spread `evenly` over the footprint (rain) the neighbour grid's columns get room
+  // for their share (NeighbourGrid::reserve). No effect on any result.
+  void reserve(std::int64_t grains, bool evenly);
 
   const Grains& grains() const;
   // Hands the placed grains over (the engine is empty afterwards); saves a copy of a large packing.

@@ -20,7 +20,8 @@ RunResult place_all(const Scene& s, std::int64_t total, double r_max, Next next,
                     const std::function<void(std::int64_t done, std::int64_t total)>& progress,
                     std::chrono::steady_clock::time_point start) {
   Deposition deposition(s.dimension, s.container, r_max);
-  deposition.reserve(total);
+  // Rain spreads the grains evenly over the footprint, so each column can be given room for its share at once.
+  deposition.reserve(total, s.source.kind == SourceSpec::Kind::Rain);
   constexpr std::int64_t kProgressEvery = 256;
   Drop ahead[3];
   for (std::int64_t k = 0; k < std::min<std::int64_t>(3, total); ++k) ahead[k] = next();
