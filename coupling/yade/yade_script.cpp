@@ -28,6 +28,7 @@
 #include "coupling/dem/dem_walls.h"
 #include "coupling/dem/drum_mesh.h"
 #include "coupling/dem/materials.h"
+#include "coupling/dem/neighbour_skin.h"
 #include "coupling/dem/relax_plan.h"
 #include "coupling/dem/timestep.h"
 
@@ -141,16 +142,18 @@ std::string rolling_call(const Scene& scene, const PackingStats& st, double mu_r
          num(mu_r) + ": krot = kt R*^2, cap mu_r R* Fn\n";
 }
 
-// How far YADE's collider extends each grain's bounding box (its verlet distance): YADE's default,
-// 0.5 r_min (the LIGGGHTS script's neighbour skin), unless a periodic cell needs less. YADE keeps one
+// How far YADE's collider extends each grain's bounding box (its verlet distance): the LIGGGHTS script's
+// neighbour skin (neighbour_skin.h: YADE's default 0.5 r_min, more for a pour at a coarse step), unless a
+// periodic cell needs less. YADE keeps one
 // interaction per pair, with one periodic image chosen by the collider, and for a box spanning more than
 // half the period along an axis (allowed here because of the floor box) it silently takes image 0 along
 // that axis: two grains touching across the boundary then never meet, and one falls through the other.
 // So each grain's box, 2 (r_max + d), must stay below half of every lateral period: d = 0.9 (L/4 - r_max)
 // when that is smaller; a period of 4 r_max or less, where a grain can touch two images of another at
 // once, is refused.
-double verlet_distance(const Scene& scene, const PackingStats& st, double period_x, double period_y) {
-  double d = 0.5 * st.r_min;
+double verlet_distance(const Scene& scene, const RelaxPlan& plan, const PackingStats& st, double period_x,
+                       double period_y) {
+  const double d = neighbour_skin(plan, st.r_min);
   if (scene.container.kind != ContainerKind::Periodic) return d;
   const double period = std::min(period_x, period_y);
   const double room = 0.25 * period - st.r_max;
@@ -301,7 +304,7 @@ std::string yade_script(const Packing& packing, const Scene& scene, const RelaxP
   // Periodic cell: 2D gets a y period wide enough that no disk meets its own image; z is far above the packing.
   const double period_y = scene.dimension == 2 ? 8.0 * st.r_max : box.size_y;
   const double period_z = std::max(2.0 * box.height, 4.0 * st.top);
-  const double verlet = verlet_distance(scene, st, box.size_x, period_y);
+  const double verlet = verlet_distance(scene, plan, st, box.size_x, period_y);
   const CheckSchedule sched = check_schedule(packing.grains, scene, plan);
   const double velocity = hooke ? hooke_characteristic_velocity(packing.grains) : 0.0;
 
@@ -337,7 +340,8 @@ std::string yade_script(const Packing& packing, const Scene& scene, const RelaxP
       << "\n"
       << compaction_constant(plan, packing.grains, sched) << pour_constant(plan) << rotation_constant(plan) << tap_constant(plan)
       << "VERLET_DIST = " << num(verlet) << "  # m, collider's bounding-box margin: "
-      << (verlet < 0.5 * st.r_min ? "below half the period with the largest grain" : "0.5 r_min") << "\n\n\n"
+      << (verlet < neighbour_skin(plan, st.r_min) ? "below half the period with the largest grain"
+                                                         : "the neighbour skin, " + num(verlet / st.r_min) + " r_min") << "\n\n\n"
       << "def scene():\n";
 
   // Materials: elastic constants and density per species, then the walls'.
