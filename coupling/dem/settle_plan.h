@@ -76,6 +76,15 @@ CalibrationPlan calibration_plan(const Scene& scene, std::int64_t grains = 0);
 // lies away from the one measured.
 inline constexpr double kDampingAnchorDepth = 14.1;  // largest diameters: bed3d, 10 000 grains in 3 cm x 3 cm
 inline constexpr double kCompactionDamping = 0.075;
+// Beds deeper than this (largest diameters) overshoot their target: the frictionless collapse runs from the floor
+// up, and the upper bed, not yet jammed at the switch, keeps collapsing after it. bed3d at 42.3: phi 0.633 against
+// the target 0.6268 and the pours' 0.6268, Z 5.67 against 5.520; at 141 (10^5 grains): +0.014 in the compaction's
+// window and the unbalanced force still 0.08 (threshold 0.001) 0.3 s after the switch (docs/settle/README.md).
+// settle serves them, and says so (settle_depth_warning).
+inline constexpr double kDeepBedDepth = 1.5 * kDampingAnchorDepth;
+// "" for a bed at most kDeepBedDepth largest diameters deep; else the warning settle prints and records
+// (settle.json chosen.compaction_damping.warning).
+std::string settle_depth_warning(double depth_in_largest_diameters);
 // YADE's local damping brakes a collapse less than LIGGGHTS' viscous damping of the same value: 0.5 landed on
 // bed3d at 3 cm (docs/guide/relax.md); no depth rule has been measured for it.
 inline constexpr double kYadeCompactionDamping = 0.5;

@@ -196,6 +196,19 @@ TEST(SettlePlan, CompactionDampingIsTheMeasuredValueAndSaysWhereItWasMeasured) {
   EXPECT_NE(near.find("this bed: 15 largest diameters"), std::string::npos) << near;
 }
 
+// A bed deeper than 1.5x the depth settle was measured at gets a warning naming its depth, in settle.json too;
+// one within it does not.
+TEST(SettlePlan, DeepBedsAreServedWithAWarningNamingTheirDepth) {
+  const Scene s = bed(3);
+  EXPECT_EQ(settle_depth_warning(5.0), "");
+  EXPECT_EQ(settle_depth_warning(1.5 * 14.1), "");
+  const std::string w = settle_depth_warning(141.0);
+  EXPECT_NE(w.find("141 largest diameters deep"), std::string::npos) << w;
+  EXPECT_NE(w.find("overshoot"), std::string::npos) << w;
+  EXPECT_FALSE(settle_choices(s, 0.63, {}, 15.0).record["compaction_damping"].contains("warning"));
+  EXPECT_EQ(settle_choices(s, 0.63, {}, 42.3).record["compaction_damping"]["warning"], settle_depth_warning(42.3));
+}
+
 TEST(SettlePlan, ChoicesRecordTheTargetAndWhereEachValueCameFrom) {
   Scene s = bed(3);
   const SettleChoices c = settle_choices(s, 0.63, {{"source", "calibration pour"}}, 15.0);
