@@ -132,8 +132,8 @@ int run(const Options& o, const CLI::App& cmd) {
            : btr::settle_choices(scene, target, target_from,
                                  btr::bed_depth_in_largest_diameters(btr_packing.grains, scene, target),
                                  btr::settle_target_margin(btr_packing.grains, scene, target));
-  if (choices.record.contains("compaction_damping") && choices.record["compaction_damping"].contains("warning"))
-    std::cerr << "btr settle: warning: " << choices.record["compaction_damping"]["warning"].get<std::string>() << "\n";
+  const std::string warning = choices.record.value(json::json_pointer("/compaction_damping/warning"), std::string());
+  if (!warning.empty()) std::cerr << "btr settle: warning: " << warning << "\n";
   btr::Scene relax_scene = choices.scene;
   relax_scene.relax.stop_rule = choices.stop_rule;
   btr::RelaxSettings settings = choices.settings;

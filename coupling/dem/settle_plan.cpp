@@ -179,7 +179,7 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
   const bool yade = scene.relax.engine == "yade";
   const double compaction_damping = yade ? kYadeCompactionDamping : kCompactionDamping;
   c.settings.compaction_damping = compaction_damping;
-  const bool measured_depth = depth >= 0.75 * kDampingAnchorDepth && depth <= 1.5 * kDampingAnchorDepth;
+  const bool measured_depth = depth >= 0.75 * kDampingAnchorDepth && depth <= kDeepBedDepth;
   const std::string depth_text = g6(depth) + " largest diameters";
   c.record = {
       {"target_phi", {{"value", target_phi}, {"from", target_from}}},

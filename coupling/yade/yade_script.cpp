@@ -151,17 +151,15 @@ std::string rolling_call(const Scene& scene, const PackingStats& st, double mu_r
 // So each grain's box, 2 (r_max + d), must stay below half of every lateral period: d = 0.9 (L/4 - r_max)
 // when that is smaller; a period of 4 r_max or less, where a grain can touch two images of another at
 // once, is refused.
-double verlet_distance(const Scene& scene, const RelaxPlan& plan, const PackingStats& st, double period_x,
-                       double period_y) {
-  const double d = neighbour_skin(plan, st.r_min);
-  if (scene.container.kind != ContainerKind::Periodic) return d;
+double verlet_distance(const Scene& scene, double skin, const PackingStats& st, double period_x, double period_y) {
+  if (scene.container.kind != ContainerKind::Periodic) return skin;
   const double period = std::min(period_x, period_y);
   const double room = 0.25 * period - st.r_max;
   if (!(room > 0.0))
     refuse(scene, "container.size",
            "YADE needs a period above 4 largest radii (" + num(4.0 * st.r_max) + " m) to give each pair one periodic "
            "image; got " + num(period) + " m");
-  return std::min(d, 0.9 * room);
+  return std::min(skin, 0.9 * room);
 }
 
 // COMPACTION: None, or the plan's compaction to a target packing fraction (CompactionPlan), checked at every
@@ -304,7 +302,8 @@ std::string yade_script(const Packing& packing, const Scene& scene, const RelaxP
   // Periodic cell: 2D gets a y period wide enough that no disk meets its own image; z is far above the packing.
   const double period_y = scene.dimension == 2 ? 8.0 * st.r_max : box.size_y;
   const double period_z = std::max(2.0 * box.height, 4.0 * st.top);
-  const double verlet = verlet_distance(scene, plan, st, box.size_x, period_y);
+  const double skin = neighbour_skin(plan, st.r_min);
+  const double verlet = verlet_distance(scene, skin, st, box.size_x, period_y);
   const CheckSchedule sched = check_schedule(packing.grains, scene, plan);
   const double velocity = hooke ? hooke_characteristic_velocity(packing.grains) : 0.0;
 
@@ -340,7 +339,7 @@ std::string yade_script(const Packing& packing, const Scene& scene, const RelaxP
       << "\n"
       << compaction_constant(plan, packing.grains, sched) << pour_constant(plan) << rotation_constant(plan) << tap_constant(plan)
       << "VERLET_DIST = " << num(verlet) << "  # m, collider's bounding-box margin: "
-      << (verlet < neighbour_skin(plan, st.r_min) ? "below half the period with the largest grain"
+      << (verlet < skin ? "below half the period with the largest grain"
                                                          : "the neighbour skin, " + num(verlet / st.r_min) + " r_min") << "\n\n\n"
       << "def scene():\n";
 
