@@ -143,6 +143,11 @@ json measures_to_json(const btr::PackingMeasures& m) {
           {"heap", heap},
           {"surface_profile_x", profile_json(m.profile_x)},
           {"segregation", segregation_json(m.segregation)},
+          {"height_profile", m.height_profile.thickness > 0.0
+                                 ? json{{"slab_thickness", m.height_profile.thickness},
+                                        {"z_mid", m.height_profile.z_mid},
+                                        {"packing_fraction", m.height_profile.packing_fraction}}
+                                 : json(nullptr)},
           {"stratification", m.heap_source ? stratification_json(m.stratification) : json(nullptr)},
           {"height", {{"max_top", m.max_top}, {"mean_centre", m.mean_centre_height}}}};
 }

@@ -772,7 +772,31 @@ PackingMeasures measure_packing(const Grains& grains, int dimension, const Conta
   for (std::size_t i = 0; i < grains.size(); ++i) x[i] = grains[i].x.x();
   m.profile_x = surface_profile(grains, x);
   m.segregation = vertical_segregation(grains);
+  m.height_profile = height_profile(grains, dimension, m.bulk, options.margin_diameters * m.largest_diameter,
+                                    m.largest_diameter);
   return m;
+}
+
+HeightProfile height_profile(const Grains& grains, int dimension, const BulkMeasures& bulk, double margin,
+                             double thickness) {
+  HeightProfile p;
+  if (!bulk.valid || !bulk.slab || !(thickness > 0.0)) return p;
+  const double area = (bulk.window.hi.x() - bulk.window.lo.x()) *
+                      (dimension == 3 ? bulk.window.hi.y() - bulk.window.lo.y() : 1.0);
+  const auto slabs = static_cast<std::size_t>(std::floor((bulk.window.hi.z() + margin) / thickness));
+  if (slabs == 0) return p;
+  std::vector<double> solid(slabs, 0.0);
+  for (const Grain& g : grains) {
+    const double lo = std::max(0.0, std::floor((g.x.z() - g.r) / thickness));
+    for (auto k = static_cast<std::size_t>(lo); k < slabs && k * thickness < g.x.z() + g.r; ++k)
+      solid[k] += grain_volume_in_slab(g, dimension, k * thickness, (k + 1) * thickness);
+  }
+  p.thickness = thickness;
+  for (std::size_t k = 0; k < slabs; ++k) {
+    p.z_mid.push_back((k + 0.5) * thickness);
+    p.packing_fraction.push_back(solid[k] / (area * thickness));
+  }
+  return p;
 }
 
 }  // namespace btr

@@ -164,6 +164,17 @@ DrumMeasures drum_measures(const Grains& grains, int dimension, const Container&
 // grains centred in its column, columns one largest diameter wide), in m.
 std::vector<double> surface_depth(const Grains& grains, int dimension);
 
+// Packing fraction against height of a periodic bed (bulk.slab): slabs `thickness` thick from the floor up to the
+// lowest column top (the bulk window's top plus `margin` metres), each grain's exact part in each slab over the
+// period's area. What a bulk mean hides: a bed denser at the floor than under its surface. Empty (thickness 0)
+// for other containers or without a window.
+struct HeightProfile {
+  double thickness = 0.0;
+  std::vector<double> z_mid, packing_fraction;
+};
+HeightProfile height_profile(const Grains& grains, int dimension, const BulkMeasures& bulk, double margin,
+                             double thickness);
+
 // Everything above for one packing, with the options that define it.
 struct PackingMeasures {
   MetricsOptions options;
@@ -179,6 +190,7 @@ struct PackingMeasures {
   HeapMeasures heap;
   std::vector<ProfilePoint> profile_x;  // free surface against x (every packing)
   SegregationIndex segregation;         // vertical
+  HeightProfile height_profile;         // periodic beds: slabs one largest diameter thick
   Stratification stratification;        // heaps (heap_source) of two or more species (btr/measures/stratification.h)
 };
 

@@ -33,6 +33,20 @@ struct CompactionPlan {
   long steps_per_check = 0;
   long max_checks_per_scale = 0;        // each scale runs at most max_time
   double rest_kinetic = 0.0;            // J
+  // Deep beds (settle): the bed compacted slab by slab from the floor up, as a pour builds it, instead of all at
+  // once. Slab k is the grains slabs[k-1].last+1 .. slabs[k].last (0-based, packing order: a BTR deposit's drop
+  // order, so the first slabs[k].last+1 grains are the BTR bed of that many drops). The grains above the slab
+  // being compacted are held (not integrated: fixed obstacles, as a pour's held lattice); the slab is released
+  // and frictionless (friction_scales[0]; the grains below it have their friction) until the packing fraction
+  // of its window, [window_lo_z, window_hi_z] within the plan's lateral window bounds, reaches the target (or it
+  // is at rest); then its friction is restored and the next slab released. After the last, as without slabs.
+  // Empty: the whole bed at once in the plan's window.
+  struct Slab {
+    std::size_t last = 0;                // 0-based index of the slab's last grain
+    double window_lo_z = 0.0, window_hi_z = 0.0;
+    double window_measure = 0.0;         // m^3 (3D) or m^2 (2D)
+  };
+  std::vector<Slab> slabs;
 };
 
 // The release of a reference pour (pour.h), run before the stop rule: every grain starts held on a lattice

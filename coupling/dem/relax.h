@@ -31,6 +31,9 @@ struct RelaxSettings {
   std::optional<double> compaction_damping;            // overrides relax.compaction_damping
   std::optional<double> compaction_timestep_fraction;  // overrides relax.compaction_timestep_fraction
   double target_margin = 3.0;       // bulk window of the target: largest diameters from floor, walls, surface
+  // Compact the bed in this many slabs of equal grain counts, from the floor up (CompactionPlan::slabs); the
+  // packing must be a BTR deposit in drop order. 1: the whole bed at once.
+  int compaction_slabs = 1;
 };
 
 // What an engine run produced.
@@ -59,6 +62,11 @@ struct RelaxResult {
     double friction_scale = 0.0;   // the scale in force when it ended
     double time = 0.0;             // s, when the friction was restored
     double packing_fraction = 0.0; // the engine's in-run bulk packing fraction then (exact cut volumes)
+    struct Slab {                  // a slab-by-slab compaction (CompactionPlan::slabs): each slab's end
+      bool reached = false;
+      double time = 0.0, packing_fraction = 0.0;
+    };
+    std::vector<Slab> slabs;
   } compaction;
 };
 

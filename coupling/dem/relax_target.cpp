@@ -62,6 +62,42 @@ CompactionWindow compaction_window(const Grains& grains, const Scene& scene, dou
   return w;
 }
 
+std::vector<CompactionPlan::Slab> compaction_slabs(const Grains& grains, const Scene& scene, double margin,
+                                                   const CompactionPlan& c, int count) {
+  if (count < 2) return {};
+  if (static_cast<std::size_t>(count) > grains.size())
+    throw RelaxRefused("compaction in " + std::to_string(count) + " slabs: the packing has only " +
+                       std::to_string(grains.size()) + " grains");
+  if (c.friction_scales.size() != 1)
+    throw RelaxRefused("compaction in slabs: it runs one friction scale, got " +
+                       std::to_string(c.friction_scales.size()));
+  const double cross_section = c.window_measure / (c.window_hi.z() - c.window_lo.z());
+  std::vector<CompactionPlan::Slab> slabs;
+  double lo = c.window_lo.z();
+  for (int k = 1; k <= count; ++k) {
+    CompactionPlan::Slab s;
+    s.last = grains.size() * static_cast<std::size_t>(k) / static_cast<std::size_t>(count) - 1;
+    double hi = c.window_hi.z();
+    if (k < count) {  // the first s.last + 1 drops are a BTR bed of their own: its window, lowered as the bed's
+      const Grains below(grains.begin(), grains.begin() + static_cast<std::ptrdiff_t>(s.last + 1));
+      const CompactionWindow w = compaction_window(below, scene, margin, c.target);
+      if (!w.valid)
+        throw RelaxRefused("compaction in slabs: slab " + std::to_string(k) + " has no window (" + w.why +
+                           "): use fewer slabs");
+      hi = w.hi.z();
+    }
+    if (!(hi > lo))
+      throw RelaxRefused("compaction in slabs: slab " + std::to_string(k) + "'s window is empty (its top " + g6(hi) +
+                         " m is not above the slab below's " + g6(lo) + " m): use fewer slabs");
+    s.window_lo_z = lo;
+    s.window_hi_z = hi;
+    s.window_measure = cross_section * (hi - lo);
+    slabs.push_back(s);
+    lo = hi;
+  }
+  return slabs;
+}
+
 CompactionPlan plan_compaction(const Packing& packing, const Scene& scene, const RelaxSettings& settings,
                                double timestep, double kinetic_threshold) {
   CompactionPlan c;
@@ -111,9 +147,27 @@ CompactionPlan plan_compaction(const Packing& packing, const Scene& scene, const
   c.max_checks_per_scale =
       std::max(1L, static_cast<long>(std::ceil(scene.relax.max_time / c.timestep / kCompactionCheckSteps)));
   c.rest_kinetic = kRestLoosening * kinetic_threshold;
+  c.slabs = compaction_slabs(packing.grains, scene, settings.target_margin, c, settings.compaction_slabs);
   c.enabled = true;
   return c;
 }
+
+namespace {
+nlohmann::json slabs_record(const CompactionPlan& plan, const RelaxResult& result) {
+  nlohmann::json rec = nlohmann::json::array();
+  for (std::size_t k = 0; k < plan.slabs.size(); ++k) {
+    const CompactionPlan::Slab& s = plan.slabs[k];
+    nlohmann::json r = {{"grains", s.last + 1 - (k == 0 ? 0 : plan.slabs[k - 1].last + 1)},
+                        {"window_z", {s.window_lo_z, s.window_hi_z}}};
+    if (k < result.compaction.slabs.size())
+      r.update({{"reached", result.compaction.slabs[k].reached},
+                {"time", result.compaction.slabs[k].time},
+                {"in_run_packing_fraction", result.compaction.slabs[k].packing_fraction}});
+    rec.push_back(r);
+  }
+  return rec;
+}
+}  // namespace
 
 nlohmann::json target_phi_record(const CompactionPlan& plan, const RelaxResult& result, const Scene& scene,
                                  double margin) {
@@ -140,6 +194,14 @@ nlohmann::json target_phi_record(const CompactionPlan& plan, const RelaxResult& 
                            "grain stopped, and the scene's stop rule run with relax.damping"}});
   else
     rec["recipe"] = "the packing already had the target: relaxed without compaction";
+  if (plan.enabled && !plan.slabs.empty()) {
+    rec["slabs"] = slabs_record(plan, result);
+    rec["recipe"] = "in one engine run, slab by slab from the floor up (slabs: grains in drop order), as a pour "
+                    "builds the bed: the slab released (the grains above held, not integrated) and frictionless "
+                    "(friction_scales) with compaction_damping until the packing fraction of its window reached the "
+                    "target, then its friction restored and the next slab released; after the last, every grain "
+                    "stopped and the scene's stop rule run with relax.damping";
+  }
   return rec;
 }
 

@@ -38,6 +38,14 @@ struct CompactionWindow {
 };
 CompactionWindow compaction_window(const Grains& grains, const Scene& scene, double margin, double target);
 
+// settings.compaction_slabs > 1 (CompactionPlan::slabs): `count` slabs of equal grain counts in the packing's
+// order (a BTR deposit's drops); slab k's window runs from the top of slab k-1's (the first: the plan's floor
+// margin) to the top of the window the BTR bed of slab 1..k's drops would have, lowered for its compaction
+// (compaction_window); the last slab's top is the plan's. Empty for count < 2. Throws RelaxRefused for more slabs
+// than grains, several friction scales, or a slab without a window.
+std::vector<CompactionPlan::Slab> compaction_slabs(const Grains& grains, const Scene& scene, double margin,
+                                                   const CompactionPlan& plan, int count);
+
 // The compaction phase of a relaxation of `packing`, from settings (which override the scene's relax.target_phi,
 // friction_scales and compaction_damping). Not enabled without a target, or when the packing's bulk packing
 // fraction already reaches it (then only `target` and `initial_phi` are set). The compaction's step is

@@ -76,15 +76,21 @@ CalibrationPlan calibration_plan(const Scene& scene, std::int64_t grains = 0);
 // lies away from the one measured.
 inline constexpr double kDampingAnchorDepth = 14.1;  // largest diameters: bed3d, 10 000 grains in 3 cm x 3 cm
 inline constexpr double kCompactionDamping = 0.075;
-// Beds deeper than this (largest diameters) overshoot their target: the frictionless collapse runs from the floor
-// up, and the upper bed, not yet jammed at the switch, keeps collapsing after it. bed3d at 42.3: phi 0.633 against
-// the target 0.6268 and the pours' 0.6268, Z 5.67 against 5.520; at 141 (10^5 grains): +0.014 in the compaction's
-// window and the unbalanced force still 0.08 (threshold 0.001) 0.3 s after the switch (docs/settle/README.md).
-// settle serves them, and says so (settle_depth_warning).
+// Beds deeper than this (largest diameters), compacted at once, overshoot their target: the frictionless collapse
+// runs from the floor up, and the upper bed, not yet jammed at the switch, keeps collapsing after it. bed3d at
+// 42.3: phi 0.633 against the target 0.6268 and the pours' 0.6268, Z 5.67 against 5.520; at 141 (10^5 grains):
+// +0.014 in the compaction's window and the unbalanced force still 0.08 (threshold 0.001) 0.3 s after the switch;
+// at 39 (docs/settle/deep) 0.65 at the floor, 0.60 at the top. So LIGGGHTS compacts them in slabs
+// (settle_compaction_slabs); settle serves them, and says what was measured (settle_depth_warning).
 inline constexpr double kDeepBedDepth = 1.5 * kDampingAnchorDepth;
 // "" for a bed at most kDeepBedDepth largest diameters deep; else the warning settle prints and records
 // (settle.json chosen.compaction_damping.warning).
-std::string settle_depth_warning(double depth_in_largest_diameters);
+std::string settle_depth_warning(double depth_in_largest_diameters, int compaction_slabs = 1);
+// The slabs settle compacts a bed in (RelaxSettings::compaction_slabs, LIGGGHTS): 1 up to kDeepBedDepth largest
+// diameters, deeper ceil(depth / kDampingAnchorDepth), so each slab is at most as deep as the bed the compaction
+// damping was measured on. Compacted at once, a deeper bed collapses from the floor up and leaves a density
+// gradient (39 largest diameters: 0.65 at the floor, 0.60 at the top; its pour 0.62-0.63 throughout).
+int settle_compaction_slabs(double depth_in_largest_diameters);
 // YADE's local damping brakes a collapse less than LIGGGHTS' viscous damping of the same value: 0.5 landed on
 // bed3d at 3 cm (docs/guide/relax.md); no depth rule has been measured for it.
 inline constexpr double kYadeCompactionDamping = 0.5;

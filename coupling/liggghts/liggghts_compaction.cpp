@@ -9,7 +9,14 @@ namespace btr {
 
 std::string liggghts_compaction_setup(const CompactionPlan& c, int dimension) {
   std::ostringstream s;
-  const std::string zlo = g17(c.window_lo.z()), zhi = g17(c.window_hi.z());
+  // A slab compaction watches one slab's window at a time: its z bounds and measure are variables, set per slab.
+  const bool slabs = !c.slabs.empty();
+  const std::string zlo = slabs ? "v_btr_wlo" : g17(c.window_lo.z()), zhi = slabs ? "v_btr_whi" : g17(c.window_hi.z());
+  if (slabs)
+    s << "\n# The window's z bounds and measure: the slab's being compacted (set before each slab).\n"
+      << "variable btr_wlo equal " << g17(c.slabs.front().window_lo_z) << "\n"
+      << "variable btr_whi equal " << g17(c.slabs.front().window_hi_z) << "\n"
+      << "variable btr_wmeasure equal " << g17(c.slabs.front().window_measure) << "\n";
   // LIGGGHTS 3.8's atom-style variables have no min/max: min(x, y) = (x + y - |x - y|) / 2, max likewise.
   auto max = [](const std::string& x, const std::string& y) { return "0.5*(" + x + "+" + y + "+abs(" + x + "-(" + y + ")))"; };
   auto min = [](const std::string& x, const std::string& y) { return "0.5*(" + x + "+" + y + "-abs(" + x + "-(" + y + ")))"; };
@@ -54,14 +61,78 @@ std::string liggghts_compaction_setup(const CompactionPlan& c, int dimension) {
   }
   s << "variable btr_grain_volume atom " << volume << (dimension == 3 ? "\n" : "   # 2D: areas\n")
     << "compute btr_bulk_volume all reduce sum v_btr_grain_volume\n"
-    << "variable btr_phi equal c_btr_bulk_volume/" << g17(c.window_measure) << "\n";
+    << "variable btr_phi equal c_btr_bulk_volume/" << (slabs ? "v_btr_wmeasure" : g17(c.window_measure)) << "\n";
   return s.str();
 }
+
+namespace {
+
+// CompactionPlan::slabs, slab by slab: the slab's grains (btr_slab) take their species' twin type, the grains up
+// to its last join btr_released (the integrator's group), and the check loop runs on its window until the target
+// or rest; then the slab's grains take their species' type again. Each slab prints "BTR-COMPACTION-SLAB k K
+// reached|rest|max-time t = T s phi = P", and after the last "BTR-COMPACTION-END reached|not-reached ..." (reached:
+// every slab did).
+std::string slab_loop(const CompactionPlan& c, const Scene& scene, double arming_time) {
+  std::ostringstream s;
+  const std::string target = g17(c.target), rest = g17(c.rest_kinetic), scale = g6(c.friction_scales.front());
+  const std::size_t n_species = scene.grains.components.size(), n = c.slabs.size();
+  s << "# Compaction in " << n << " slabs from the floor up (the grains above the slab held, not integrated): the\n"
+    << "# slab frictionless (friction x " << scale << ") until its window reaches " << g6(c.target) << ", checked every "
+    << c.steps_per_check << " steps; then its friction back and the next slab.\n";
+  for (std::size_t t = 0; t < n_species; ++t)
+    s << "group btr_species_" << t + 1 << " type " << t + 1 << "\n";
+  s << "variable btr_slabs_reached equal 0\n";
+  for (std::size_t k = 0; k < n; ++k) {
+    const CompactionPlan::Slab& slab = c.slabs[k];
+    const std::string id = std::to_string(k + 1), first = std::to_string(k == 0 ? 1 : c.slabs[k - 1].last + 2),
+                      last = std::to_string(slab.last + 1), of = " " + id + " " + std::to_string(n);
+    s << "group btr_released id <> 1 " << last << "\n";
+    if (k == 0) s << "fix btr_integrate btr_released nve/sphere\n";
+    s << "group btr_slab id <> " << first << " " << last << "\n";
+    for (std::size_t t = 0; t < n_species; ++t)
+      s << "group btr_slab_" << t + 1 << " intersect btr_slab btr_species_" << t + 1 << "\n"
+        << "set group btr_slab_" << t + 1 << " type " << liggghts_slab_twin_type(scene, t) << "\n";
+    s << "variable btr_wlo equal " << g17(slab.window_lo_z) << "\n"
+      << "variable btr_whi equal " << g17(slab.window_hi_z) << "\n"
+      << "variable btr_wmeasure equal " << g17(slab.window_measure) << "\n"
+      << "run 0 post no\n"  // the new types, group and integrator set up
+      << "variable btr_crest equal ${btr_time}+" << g17(arming_time) << "\n"
+      << "label btr_slab_" << id << "\n"
+      << "variable btr_slab_check_" << id << " loop " << c.max_checks_per_scale << "\n"
+      << "run " << c.steps_per_check << " pre no post no\n"
+      << "if \"${btr_ekin} > ${btr_bound}\" then &\n"
+      << "  \"print 'BTR-FAILURE kinetic energy ${btr_ekin} J above the bound ${btr_bound} J at t = ${btr_time} s'\" "
+         "quit\n"
+      << "if \"${btr_phi} >= " << target << "\" then &\n"
+      << "  \"print 'BTR-COMPACTION-SLAB" << of << " reached t = ${btr_time} s phi = ${btr_phi}'\" &\n"
+      << "  \"variable btr_slabs_reached equal ${btr_slabs_reached}+1\" &\n"
+      << "  \"jump SELF btr_slab_done_" << id << "\"\n"
+      << "if \"${btr_time} >= ${btr_crest} && ${btr_kmean} < " << rest << " && ${btr_ekin} < " << rest << "\" then &\n"
+      << "  \"print 'BTR-COMPACTION-SLAB" << of << " rest t = ${btr_time} s phi = ${btr_phi}'\" &\n"
+      << "  \"jump SELF btr_slab_done_" << id << "\"\n"
+      << "next btr_slab_check_" << id << "\n"
+      << "jump SELF btr_slab_" << id << "\n"
+      << "print \"BTR-COMPACTION-SLAB" << of << " max-time t = ${btr_time} s phi = ${btr_phi}\"\n"
+      << "label btr_slab_done_" << id << "\n";
+    for (std::size_t t = 0; t < n_species; ++t)
+      s << "set group btr_slab_" << t + 1 << " type " << t + 1 << "\n"
+        << "group btr_slab_" << t + 1 << " delete\n";
+    s << "group btr_slab delete\n";
+  }
+  s << "if \"${btr_slabs_reached} == " << n << "\" then &\n"
+    << "  \"print 'BTR-COMPACTION-END reached friction x " << scale << " t = ${btr_time} s phi = ${btr_phi}'\" &\n"
+    << "else &\n"
+    << "  \"print 'BTR-COMPACTION-END not-reached friction x " << scale << " t = ${btr_time} s phi = ${btr_phi}'\"\n";
+  return s.str();
+}
+
+}  // namespace
 
 std::string liggghts_compaction_loop(const CompactionPlan& c, const Scene& scene,
                                      double settle_damping, double settle_timestep, double arming_time) {
   std::ostringstream s;
   const std::string target = g17(c.target), rest = g17(c.rest_kinetic);
+  const bool slabs = !c.slabs.empty();
   s << "# Compaction: friction x";
   for (double f : c.friction_scales) s << " " << g6(f);
   s << " in turn (the next once the bed is at rest, kinetic energy and its mean below " << g6(c.rest_kinetic)
@@ -70,7 +141,8 @@ std::string liggghts_compaction_loop(const CompactionPlan& c, const Scene& scene
     << " s (fraction " << g6(c.timestep_fraction) << " of the rule's characteristic time; the settle's: "
     << g6(settle_timestep) << " s).\n";
   if (c.timestep != settle_timestep) s << "timestep " << g17(c.timestep) << "\n";
-  for (std::size_t k = 0; k < c.friction_scales.size(); ++k) {
+  if (slabs) s << slab_loop(c, scene, arming_time);
+  for (std::size_t k = 0; !slabs && k < c.friction_scales.size(); ++k) {
     const std::string scale = g6(c.friction_scales[k]), n = std::to_string(k + 1);
     if (k > 0)
       s << liggghts_friction_fixes(scene, c.friction_scales[k]) << "run 0 post no\n";
@@ -91,12 +163,13 @@ std::string liggghts_compaction_loop(const CompactionPlan& c, const Scene& scene
       << "label btr_compact_rest_" << n << "\n"
       << "print \"BTR-COMPACTION-REST friction x " << scale << " t = ${btr_time} s phi = ${btr_phi}\"\n";
   }
-  s << "print \"BTR-COMPACTION-END not-reached friction x " << g6(c.friction_scales.back())
-    << " t = ${btr_time} s phi = ${btr_phi}\"\n"
-    << "label btr_compaction_done\n"
+  if (!slabs)
+    s << "print \"BTR-COMPACTION-END not-reached friction x " << g6(c.friction_scales.back())
+      << " t = ${btr_time} s phi = ${btr_phi}\"\n";
+  s << "label btr_compaction_done\n"
     << "# The scene's friction back, every grain stopped, the settle's damping and step, the stop rule armed anew.\n"
     << (c.timestep != settle_timestep ? "timestep " + g17(settle_timestep) + "\n" : std::string())
-    << liggghts_friction_fixes(scene)
+    << liggghts_friction_fixes(scene, 1.0, slabs)
     << "velocity all set 0.0 0.0 0.0\n"
     << "set group all omegax 0.0 omegay 0.0 omegaz 0.0\n";
   if (c.damping > 0) s << "unfix " << kCompactionDampingFix << "\n";

@@ -2,7 +2,8 @@
 // The LIGGGHTS script's compaction phase (btr relax --target-phi; CompactionPlan in engine_adapter.h says what
 // it does): the bulk window's packing fraction (v_btr_phi: each grain's exact part between the window's planes in
 // z, times its fraction between the side planes in walled containers), and the loop that runs before the stop
-// rule's loop, one block per friction scale.
+// rule's loop, one block per friction scale, or with slabs (CompactionPlan::slabs) one block per slab, the window's
+// z bounds and measure then variables set per slab.
 #include <string>
 
 #include "coupling/dem/engine_adapter.h"

@@ -151,6 +151,15 @@ LiggghtsLog parse_liggghts_log(const std::string& path) {
         else if (w[i] == "phi" && w[i + 1] == "=") to_double(w[i + 2], log.compaction.packing_fraction);
       continue;
     }
+    if (line.rfind("BTR-COMPACTION-SLAB ", 0) == 0) {  // k K reached|rest|max-time t = T s phi = P
+      RelaxResult::Compaction::Slab slab;
+      slab.reached = w.size() > 3 && w[3] == "reached";
+      for (std::size_t i = 0; i + 2 < w.size(); ++i)
+        if (w[i] == "t" && w[i + 1] == "=") to_double(w[i + 2], slab.time);
+        else if (w[i] == "phi" && w[i + 1] == "=") to_double(w[i + 2], slab.packing_fraction);
+      log.compaction.slabs.push_back(slab);
+      continue;
+    }
     if (line.rfind("BTR-STOP ", 0) == 0) {
       log.stop_reason = w.size() > 1 ? w[1] : "";
       for (std::size_t i = 0; i + 2 < w.size(); ++i)

@@ -104,17 +104,24 @@ SimulationBox make_box(const Grains& grains, int dimension, const Container& c, 
   return b;
 }
 
-// "peratomtype" list and "peratomtypepair" matrix over the types 1..K (components) and K+1 (walls).
+// "peratomtype" list and "peratomtypepair" matrix over the types 1..K (components) and K+1 (walls), and with
+// `twins` K+2..2K+1: each component's twin (the same material), the type a slab's grains take while the slab is
+// compacted frictionless (CompactionPlan::slabs; liggghts_slab_twin_type).
 struct TypeTable {
   std::vector<Material> type_material;  // per type, 0-based
   int wall_type = 0;                    // 1-based
+  int first_twin = 0;                   // 1-based; 0: no twins
 };
 
-TypeTable make_types(const Scene& scene) {
+TypeTable make_types(const Scene& scene, bool twins = false) {
   TypeTable t;
   for (const Component& c : scene.grains.components) t.type_material.push_back(c.material);
   t.type_material.push_back(wall_material(scene));
   t.wall_type = static_cast<int>(t.type_material.size());
+  if (twins) {
+    t.first_twin = t.wall_type + 1;
+    for (const Component& c : scene.grains.components) t.type_material.push_back(c.material);
+  }
   return t;
 }
 
@@ -128,20 +135,21 @@ std::string per_type(const TypeTable& t, Get get) {
 // Pair values: unlike species mix (pair_material); a wall contact takes the grain's value, read by
 // wall_get (the same getter unless a wall value differs, as gammat's wall_gamma_t).
 template <class Get, class WallGet>
+double pair_value(const TypeTable& t, int i, int j, Get get, WallGet wall_get) {
+  const Material& a = t.type_material[i - 1];
+  const Material& b = t.type_material[j - 1];
+  if (i == t.wall_type && j == t.wall_type) return wall_get(a);
+  if (i == t.wall_type) return wall_get(b);
+  if (j == t.wall_type) return wall_get(a);
+  return get(pair_material(a, b));
+}
+
+template <class Get, class WallGet>
 std::string per_type_pair(const TypeTable& t, Get get, WallGet wall_get) {
   const int n = static_cast<int>(t.type_material.size());
   std::string s = " " + std::to_string(n);
   for (int i = 1; i <= n; ++i)
-    for (int j = 1; j <= n; ++j) {
-      const Material& a = t.type_material[i - 1];
-      const Material& b = t.type_material[j - 1];
-      double v;
-      if (i == t.wall_type && j == t.wall_type) v = wall_get(a);
-      else if (i == t.wall_type) v = wall_get(b);
-      else if (j == t.wall_type) v = wall_get(a);
-      else v = get(pair_material(a, b));
-      s += " " + g17(v);
-    }
+    for (int j = 1; j <= n; ++j) s += " " + g17(pair_value(t, i, j, get, wall_get));
   return s;
 }
 
@@ -298,23 +306,44 @@ std::vector<double> liggghts_damping_gamma(const Grains& grains, const Scene& sc
   return gamma;
 }
 
-std::string liggghts_friction_fixes(const Scene& scene, double scale) {
-  const TypeTable types = make_types(with_friction_scaled(scene, scale));
+int liggghts_slab_twin_type(const Scene& scene, std::size_t component) {
+  return static_cast<int>(scene.grains.components.size() + 2 + component);
+}
+
+// With slab twins, only the pairs with a twin are scaled: the matrix of the scene's values, then every row and
+// column of a twin replaced by the matrix of the scaled scene.
+std::string liggghts_friction_fixes(const Scene& scene, double scale, bool slab_twins) {
+  const TypeTable full = make_types(slab_twins ? scene : with_friction_scaled(scene, scale), slab_twins);
+  const TypeTable scaled = make_types(with_friction_scaled(scene, scale), slab_twins);
+  auto matrix = [&](auto get) {
+    const int n = static_cast<int>(full.type_material.size());
+    std::string s = " " + std::to_string(n);
+    for (int i = 1; i <= n; ++i)
+      for (int j = 1; j <= n; ++j) {
+        const bool twin = full.first_twin > 0 && (i >= full.first_twin || j >= full.first_twin);
+        s += " " + g17(pair_value(twin ? scaled : full, i, j, get, get));
+      }
+    return s;
+  };
   std::string s = "fix btr_friction all property/global coefficientFriction peratomtypepair" +
-                  per_type_pair(types, [](const Material& m) { return m.friction; }) + "\n";
+                  matrix([](const Material& m) { return m.friction; }) + "\n";
   if (uses_rolling_friction(scene))  // the pair style's rolling model needs the property, even scaled to 0
     s += "fix btr_rolling all property/global coefficientRollingFriction peratomtypepair" +
-         per_type_pair(types, [](const Material& m) { return m.rolling_friction; }) + "\n";
+         matrix([](const Material& m) { return m.rolling_friction; }) + "\n";
   return s;
 }
 
-std::string liggghts_viscous_fix(const std::string& id, const Grains& grains, const Scene& scene, double damping) {
+std::string liggghts_viscous_fix(const std::string& id, const Grains& grains, const Scene& scene, double damping,
+                                 bool slab_twins) {
   const std::vector<double> gamma = liggghts_damping_gamma(grains, scene, damping);
   std::string s = "# Damping " + g6(damping) + " (YADE's NewtonIntegrator damping): F = -gamma v with, per species,\n"
                   "# gamma = 2 (damping / pi) sqrt(k m) (k: contact stiffness of a mean grain under its weight),\n"
                   "# the viscous damping that dissipates the same energy per oscillation (coupling/README.md).\n"
                   "fix " + id + " all viscous " + g17(gamma[0]);
   for (std::size_t t = 1; t < gamma.size(); ++t) s += " scale " + std::to_string(t + 1) + " " + g17(gamma[t] / gamma[0]);
+  if (slab_twins)
+    for (std::size_t t = 1; t < gamma.size(); ++t)
+      s += " scale " + std::to_string(liggghts_slab_twin_type(scene, t)) + " " + g17(gamma[t] / gamma[0]);
   return s + "\n";
 }
 
@@ -351,7 +380,8 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   const std::shared_ptr<const TriangleMesh> drum =
       scene.container.kind == ContainerKind::Drum ? drum_mesh(scene.container, dim, grains) : nullptr;
   const SimulationBox box = make_box(grains, dim, scene.container, plan, drum.get());
-  const TypeTable types = make_types(scene);
+  const bool slabs = plan.compaction.enabled && !plan.compaction.slabs.empty();
+  const TypeTable types = make_types(scene, slabs);
   const CheckSchedule sched = check_schedule(grains, scene, plan);
   const int n_types = static_cast<int>(types.type_material.size());
 
@@ -436,11 +466,14 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   if (y_min < 5e6) s << "soft_particles  yes\n";
   if (y_max > 1e9) s << "hard_particles  yes\n";
 
-  s << "\n# Materials: types 1.." << n_types - 1 << " = species";
+  s << "\n# Materials: types 1.." << types.wall_type - 1 << " = species";
   for (const Component& c : scene.grains.components) s << " " << c.species;
   s << " (in this order), type " << types.wall_type << " = walls (material of species "
-    << wall_component(scene).species << ").\n"
-    << "# Unlike species: mean restitution and friction; grain-wall: the grain's values.\n";
+    << wall_component(scene).species << ")";
+  if (slabs)
+    s << ", types " << types.first_twin << ".." << n_types
+      << " = the species' twins, the type of a slab's grains while it is compacted";
+  s << ".\n# Unlike species: mean restitution and friction; grain-wall: the grain's values.\n";
   s << "fix btr_young all property/global youngsModulus peratomtype"
     << per_type(types, [](const Material& m) { return m.young; }) << "\n";
   s << "fix btr_poisson all property/global poissonsRatio peratomtype"
@@ -449,9 +482,9 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
     << per_type_pair(types, [](const Material& m) { return m.restitution; }) << "\n";
   const CompactionPlan& compaction = plan.compaction;
   if (compaction.enabled)
-    s << "# Friction scaled by " << g6(compaction.friction_scales.front())
+    s << "# Friction scaled by " << g6(compaction.friction_scales.front()) << (slabs ? " for the twins" : "")
       << " for the compaction to the target packing fraction (restored after it, below).\n"
-      << liggghts_friction_fixes(scene, compaction.friction_scales.front());
+      << liggghts_friction_fixes(scene, compaction.friction_scales.front(), slabs);
   else
     s << liggghts_friction_fixes(scene);
   if (stiffness) {
@@ -509,14 +542,14 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   }
   s << "fix btr_gravity all gravity " << g17(kGravity) << " vector 0.0 0.0 -1.0\n";
   if (compaction.enabled && compaction.damping > 0)
-    s << liggghts_viscous_fix(kCompactionDampingFix, grains, scene, compaction.damping);
+    s << liggghts_viscous_fix(kCompactionDampingFix, grains, scene, compaction.damping, slabs);
   else if (!compaction.enabled && plan.damping > 0)
     s << liggghts_viscous_fix("btr_damping", grains, scene, plan.damping);
   if (dim == 2) s << "fix btr_plane all setforce NULL 0.0 NULL   # after the walls and gravity\n";
   if (clusters)
     s << "fix btr_integrate btr_free nve/sphere\n"
       << "fix btr_rigid btr_clustered rigid molecule\n\n";
-  else if (!pour.enabled)  // a pour integrates the released grains only (liggghts_release)
+  else if (!pour.enabled && !slabs)  // a pour, a slab compaction integrate the released grains only
     s << "fix btr_integrate all nve/sphere\n\n";
 
   // Rotation is left out on purpose: a grain spinning about its contact normal meets no resistance

@@ -44,10 +44,17 @@ std::vector<double> liggghts_damping_gamma(const Grains& grains, const Scene& sc
 // The fix property/global lines of the scene's friction (and rolling friction, if the scene has any) per type
 // pair, in this writer's type order, every coefficient times `scale`; re-issued between runs they change the
 // friction.
-std::string liggghts_friction_fixes(const Scene& scene, double scale = 1.0);
+// `slab_twins`: the script has the slab compaction's twin types (CompactionPlan::slabs: types 1..K species, K+1
+// walls, K+2..2K+1 the species' twins), and only the pairs with a twin are scaled.
+std::string liggghts_friction_fixes(const Scene& scene, double scale = 1.0, bool slab_twins = false);
 
-// "fix ID all viscous ..." (with its comment): the damping `damping` as liggghts_damping_gamma computes it.
-std::string liggghts_viscous_fix(const std::string& id, const Grains& grains, const Scene& scene, double damping);
+// The type a grain of the scene's component (0-based) takes while its slab is compacted (liggghts_friction_fixes).
+int liggghts_slab_twin_type(const Scene& scene, std::size_t component);
+
+// "fix ID all viscous ..." (with its comment): the damping `damping` as liggghts_damping_gamma computes it
+// (`slab_twins`: the twin types scaled as their species).
+std::string liggghts_viscous_fix(const std::string& id, const Grains& grains, const Scene& scene, double damping,
+                                 bool slab_twins = false);
 
 // "fix ID all addforce ..." with its three atom-style variables (and comment): YADE's NewtonIntegrator damping
 // itself, each force component reduced by damping x |F_k| in the direction of motion. It must be defined after

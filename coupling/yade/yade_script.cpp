@@ -167,6 +167,9 @@ double verlet_distance(const Scene& scene, double skin, const PackingStats& st, 
 std::string compaction_constant(const RelaxPlan& plan, const Grains& grains, const CheckSchedule& sched) {
   const CompactionPlan& c = plan.compaction;
   if (!c.enabled) return "COMPACTION = None  # no target packing fraction\n";
+  if (!c.slabs.empty())
+    throw RelaxRefused("the compaction in slabs (CompactionPlan::slabs, settle's deep beds) is written for LIGGGHTS "
+                       "only; compact the bed at once in YADE");
   std::string scales;
   for (double f : c.friction_scales) scales += (scales.empty() ? "" : ", ") + num(f);
   const long samples = std::max(1L, static_cast<long>(std::ceil(plan.max_time / c.timestep / sched.average_every)));

@@ -153,6 +153,32 @@ TEST(BulkMeasures, SimpleCubicPeriodicBed) {
   EXPECT_EQ(m.coordination_histogram[6], m.grains_in_window);
 }
 
+// Slabs one diameter thick on a simple-cubic bed: each holds one whole layer, pi/6 exactly; half-thickness slabs
+// cut every sphere at its equator and read pi/6 too; a lattice whose upper half is twice as sparse (every other
+// grain of each layer removed) reads pi/12 there: the profile sees a gradient the bulk mean averages away.
+TEST(HeightProfile, SimpleCubicLayersAndAGradient) {
+  const double r = 1e-3;
+  const int n = 12, nz = 16;
+  const Grains g = simple_cubic(n, nz, r, 0.0);
+  const BulkMeasures bulk = bulk_measures(g, 3, periodic(n * 2 * r, n * 2 * r));
+  const HeightProfile p = height_profile(g, 3, bulk, 6 * r, 2 * r);
+  ASSERT_EQ(p.packing_fraction.size(), static_cast<std::size_t>(nz)) << "up to the top: window top + margin";
+  for (std::size_t k = 0; k < p.packing_fraction.size(); ++k) {
+    EXPECT_NEAR(p.z_mid[k], (2 * k + 1) * r, 1e-15);
+    EXPECT_NEAR(p.packing_fraction[k], kPi / 6, 1e-12) << k;
+  }
+  const HeightProfile half = height_profile(g, 3, bulk, 6 * r, r);
+  ASSERT_EQ(half.packing_fraction.size(), static_cast<std::size_t>(2 * nz));
+  for (double phi : half.packing_fraction) EXPECT_NEAR(phi, kPi / 6, 1e-12);
+  Grains sparse_top;
+  for (std::size_t i = 0; i < g.size(); ++i)
+    if (g[i].x.z() < nz * r || i % 2 == 0) sparse_top.push_back(g[i]);
+  const HeightProfile grad = height_profile(sparse_top, 3, bulk, 6 * r, 2 * r);
+  EXPECT_NEAR(grad.packing_fraction.front(), kPi / 6, 1e-12);
+  EXPECT_NEAR(grad.packing_fraction.back(), kPi / 12, 1e-12);
+  EXPECT_EQ(height_profile(g, 3, BulkMeasures{}, 6 * r, 2 * r).thickness, 0.0) << "no window, no profile";
+}
+
 TEST(BulkMeasures, SimpleCubicInABoxCutByTheWindowSides) {
   const double r = 1e-3;
   const int n = 14, nz = 14;

@@ -1,0 +1,175 @@
+// Deep beds compacted slab by slab (CompactionPlan::slabs, settle's beds deeper than kDeepBedDepth): the plan's
+// slabs and windows, the LIGGGHTS script's twin types and slab loop, settle's choice of the slab count, and the
+// slab compaction run for real in LIGGGHTS on a small deep BTR bed.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "btr/measures/metrics.h"
+#include "btr/placement/run_scene.h"
+#include "coupling/dem/relax_plan.h"
+#include "coupling/dem/relax_target.h"
+#include "coupling/dem/settle_plan.h"
+#include "coupling/engines.h"
+#include "relax_fixtures.h"
+#include "relaxation_checks.h"
+
+namespace {
+
+// 800 grains (r 0.8-1.2 mm) rained by BTR into a 12 mm periodic cell: about 18 largest diameters deep, room for
+// two slabs with a bulk window each.
+struct Bed {
+  btr::Scene scene;
+  btr::Packing packing;
+};
+
+Bed deep_bed() {
+  Bed b;
+  b.scene = btr_test::make_scene("slabs", 3, btr_test::container(btr::ContainerKind::Periodic, 0.012, 0.012));
+  b.scene.source.kind = btr::SourceSpec::Kind::Rain;
+  b.scene.grains.components[0].material.young = 5e6;
+  b.scene.relax.max_time = 1.0;
+  b.packing.grains = btr::run_scene(b.scene, 3, 800, {}).grains;
+  b.packing.meta = {{"scene", btr::scene_to_json(b.scene)}, {"dimension", 3}};
+  return b;
+}
+
+btr::RelaxSettings slabs(double phi, int count) {
+  btr::RelaxSettings s;
+  s.target_phi = phi;
+  s.friction_scales = std::vector<double>{0.0};
+  s.compaction_damping = 0.075;
+  s.target_margin = 2.0;
+  s.compaction_slabs = count;
+  return s;
+}
+
+double top_centre(const btr::Grains& g, std::size_t last) {
+  double top = 0.0;
+  for (std::size_t i = 0; i <= last; ++i) top = std::max(top, g[i].x.z());
+  return top;
+}
+
+TEST(CompactionSlabs, PlanCutsTheBedInDropOrderWithWindowsFromTheFloorUp) {
+  const Bed b = deep_bed();
+  const double goal = btr::bulk_packing_fraction(b.packing.grains, b.scene, 2.0) + 0.03;
+  const btr::CompactionPlan whole = btr::plan_compaction(b.packing, b.scene, slabs(goal, 1), 1e-5, 1e-9);
+  ASSERT_TRUE(whole.enabled);
+  EXPECT_TRUE(whole.slabs.empty()) << "one slab is the bed at once";
+  const double cross_section = 0.012 * 0.012;
+  for (int count : {2, 3}) {
+    const btr::CompactionPlan c = btr::plan_compaction(b.packing, b.scene, slabs(goal, count), 1e-5, 1e-9);
+    ASSERT_EQ(c.slabs.size(), static_cast<std::size_t>(count));
+    EXPECT_DOUBLE_EQ(c.window_lo.z(), whole.window_lo.z());
+    EXPECT_DOUBLE_EQ(c.slabs.front().window_lo_z, whole.window_lo.z()) << "the first slab's window: the floor margin";
+    EXPECT_DOUBLE_EQ(c.slabs.back().window_hi_z, whole.window_hi.z()) << "the last slab's top: the bed's window";
+    EXPECT_EQ(c.slabs.back().last, b.packing.grains.size() - 1);
+    for (std::size_t k = 0; k < c.slabs.size(); ++k) {
+      const btr::CompactionPlan::Slab& s = c.slabs[k];
+      EXPECT_EQ(s.last + 1, b.packing.grains.size() * (k + 1) / c.slabs.size()) << "equal grain counts";
+      EXPECT_LT(s.window_lo_z, s.window_hi_z);
+      EXPECT_NEAR(s.window_measure, cross_section * (s.window_hi_z - s.window_lo_z), 1e-18);
+      if (k > 0) EXPECT_DOUBLE_EQ(s.window_lo_z, c.slabs[k - 1].window_hi_z) << "the windows tile the bed";
+      // Inside the bed of the slab's drops: at least a largest diameter below its highest centre.
+      EXPECT_LT(s.window_hi_z, top_centre(b.packing.grains, s.last) - 2.4e-3);
+    }
+  }
+  EXPECT_THROW(btr::plan_compaction(b.packing, b.scene, slabs(goal, 12), 1e-5, 1e-9), btr::RelaxRefused)
+      << "slabs too thin for a window each";
+  btr::RelaxSettings two_scales = slabs(goal, 2);
+  two_scales.friction_scales = std::vector<double>{0.5, 0.0};
+  EXPECT_THROW(btr::plan_compaction(b.packing, b.scene, two_scales, 1e-5, 1e-9), btr::RelaxRefused);
+  btr::Packing few = b.packing;
+  few.grains.resize(600);
+  EXPECT_THROW(btr::compaction_slabs(few.grains, b.scene, 2.0, whole, 601), btr::RelaxRefused);
+}
+
+// Types 1 (the species), 2 (walls), 3 (its twin): only the twin's pairs frictionless during the compaction; the
+// slab's grains take type 3 while it runs; the integrator follows the released grains; friction back for all.
+TEST(CompactionSlabs, LiggghtsScriptGivesTheSlabItsTwinTypeAndHoldsTheGrainsAbove) {
+  const Bed b = deep_bed();
+  const double goal = btr::bulk_packing_fraction(b.packing.grains, b.scene, 2.0) + 0.03;
+  const std::string dir = btr_test::fresh_dir("slabs_script");
+  btr::export_inputs(b.packing, b.scene, "liggghts", slabs(goal, 2), dir);
+  const std::string in = btr_test::read_text(dir + "/in.btr");
+  const std::string data = btr_test::read_text(dir + "/btr.data");
+  EXPECT_NE(data.find("800 atoms\n3 atom types"), std::string::npos);
+  const std::size_t compaction =
+      in.find("coefficientFriction peratomtypepair 3 0.5 0.5 0 0.5 0.5 0 0 0 0\n");
+  const std::size_t restored = in.find("coefficientFriction peratomtypepair 3 0.5 0.5 0.5 0.5 0.5 0.5 0.5 0.5 0.5\n");
+  ASSERT_NE(compaction, std::string::npos) << in;
+  ASSERT_NE(restored, std::string::npos) << in;
+  EXPECT_EQ(in.find("fix btr_integrate all nve/sphere"), std::string::npos) << "held grains are not integrated";
+  const std::size_t first = in.find("group btr_released id <> 1 400\n");
+  const std::size_t integrate = in.find("fix btr_integrate btr_released nve/sphere");
+  const std::size_t twin1 = in.find("group btr_slab id <> 1 400\n");
+  const std::size_t second = in.find("group btr_released id <> 1 800\n");
+  const std::size_t twin2 = in.find("group btr_slab id <> 401 800\n");
+  const std::size_t end = in.find("label btr_compaction_done");
+  for (std::size_t at : {first, integrate, twin1, second, twin2, end}) ASSERT_NE(at, std::string::npos) << in;
+  EXPECT_LT(first, integrate);
+  EXPECT_LT(integrate, twin1);
+  EXPECT_LT(twin1, second);
+  EXPECT_LT(second, twin2);
+  EXPECT_LT(twin2, end);
+  EXPECT_LT(end, restored);
+  EXPECT_NE(in.find("set group btr_slab_1 type 3", twin1), std::string::npos);
+  EXPECT_NE(in.find("set group btr_slab_1 type 1", twin1), std::string::npos);
+  EXPECT_NE(in.find("variable btr_phi equal c_btr_bulk_volume/v_btr_wmeasure"), std::string::npos);
+  EXPECT_NE(in.find("BTR-COMPACTION-SLAB 2 2 reached"), std::string::npos);
+}
+
+TEST(CompactionSlabs, SettleCompactsBedsDeeperThanItsMeasuredDepthInSlabs) {
+  EXPECT_EQ(btr::settle_compaction_slabs(14.1), 1);
+  EXPECT_EQ(btr::settle_compaction_slabs(btr::kDeepBedDepth), 1);
+  EXPECT_EQ(btr::settle_compaction_slabs(28.0), 2) << "ceil(28 / 14.1): each slab at most 14.1 deep";
+  EXPECT_EQ(btr::settle_compaction_slabs(39.0), 3);
+  EXPECT_EQ(btr::settle_compaction_slabs(145.0), 11);
+  btr::Scene s = btr_test::make_scene("deep", 3, btr_test::container(btr::ContainerKind::Periodic, 0.03, 0.03));
+  s.source.kind = btr::SourceSpec::Kind::Rain;
+  const btr::SettleChoices deep = btr::settle_choices(s, 0.63, {}, 50.0, {});
+  EXPECT_EQ(deep.settings.compaction_slabs, 4);
+  EXPECT_EQ(deep.record["compaction_slabs"]["value"], 4);
+  EXPECT_NE(deep.record["compaction_damping"]["warning"].get<std::string>().find("4 slabs"), std::string::npos);
+  EXPECT_EQ(btr::settle_choices(s, 0.63, {}, 14.1, {}).settings.compaction_slabs, 1);
+  s.relax.engine = "yade";
+  EXPECT_EQ(btr::settle_choices(s, 0.63, {}, 50.0, {}).settings.compaction_slabs, 1) << "LIGGGHTS only";
+}
+
+TEST(CompactionSlabs, YadeRefusesSlabsBeforeWritingAnything) {
+  const Bed b = deep_bed();
+  const double goal = btr::bulk_packing_fraction(b.packing.grains, b.scene, 2.0) + 0.03;
+  const std::string dir = btr_test::fresh_dir("slabs_yade");
+  EXPECT_THROW(btr::export_inputs(b.packing, b.scene, "yade", slabs(goal, 2), dir), btr::RelaxRefused);
+}
+
+// Run for real: each slab reaches the target in turn, the settled bed lands near it (as the bed at once does,
+// TargetPhiEngine), its grains keep their ids and no pair overlaps beyond the contact law's small overlaps.
+TEST(CompactionSlabs, LiggghtsCompactsTheBedSlabBySlab) {
+  if (!btr_test::have_engine("liggghts")) FAIL() << "scripts/setup.sh installs it: liggghts not installed";
+  const Bed b = deep_bed();
+  const double phi0 = btr::bulk_packing_fraction(b.packing.grains, b.scene, 2.0);
+  const double goal = phi0 + 0.025;
+  const std::string dir = btr_test::fresh_dir("slabs_run");
+  const btr::RelaxResult r = btr::relax(b.packing, b.scene, "liggghts", slabs(goal, 2), dir);
+  ASSERT_EQ(r.compaction.slabs.size(), 2u);
+  for (const auto& s : r.compaction.slabs) {
+    EXPECT_TRUE(s.reached);
+    EXPECT_GE(s.packing_fraction, goal);
+  }
+  EXPECT_LT(r.compaction.slabs[0].time, r.compaction.slabs[1].time);
+  EXPECT_TRUE(r.compaction.reached);
+  EXPECT_NE(r.stop_reason, "max-time");
+  EXPECT_NEAR(btr::bulk_packing_fraction(r.relaxed.grains, b.scene, 2.0), goal, 0.015);
+  ASSERT_EQ(r.relaxed.grains.size(), b.packing.grains.size());
+  for (std::size_t i = 0; i < r.relaxed.grains.size(); ++i) EXPECT_EQ(r.relaxed.grains[i].r, b.packing.grains[i].r);
+  EXPECT_LT(btr_test::largest_pair_overlap(r.relaxed.grains, b.scene.container, 3), 0.05);
+  const nlohmann::json meta = nlohmann::json::parse(btr_test::read_text(dir + "/relaxed.json"));
+  ASSERT_EQ(meta["target_phi"]["slabs"].size(), 2u);
+  EXPECT_EQ(meta["target_phi"]["slabs"][1]["reached"], true);
+  EXPECT_EQ(meta["target_phi"]["slabs"][0]["grains"], 400);
+}
+
+}  // namespace
