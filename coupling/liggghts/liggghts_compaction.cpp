@@ -67,6 +67,13 @@ std::string liggghts_compaction_setup(const CompactionPlan& c, int dimension) {
 
 namespace {
 
+// A check's steps, then the blow-up bound.
+std::string check_run(const CompactionPlan& c) {
+  return "run " + std::to_string(c.steps_per_check) + " pre no post no\n"
+         "if \"${btr_ekin} > ${btr_bound}\" then &\n"
+         "  \"print 'BTR-FAILURE kinetic energy ${btr_ekin} J above the bound ${btr_bound} J at t = ${btr_time} s'\" quit\n";
+}
+
 // CompactionPlan::slabs, slab by slab: the slab's grains (btr_slab) take their species' twin type, the grains up
 // to its last join btr_released (the integrator's group), and the check loop runs on its window until the target
 // or rest; then the slab's grains take their species' type again. Each slab prints "BTR-COMPACTION-SLAB k K
@@ -99,10 +106,7 @@ std::string slab_loop(const CompactionPlan& c, const Scene& scene, double arming
       << "variable btr_crest equal ${btr_time}+" << g17(arming_time) << "\n"
       << "label btr_slab_" << id << "\n"
       << "variable btr_slab_check_" << id << " loop " << c.max_checks_per_scale << "\n"
-      << "run " << c.steps_per_check << " pre no post no\n"
-      << "if \"${btr_ekin} > ${btr_bound}\" then &\n"
-      << "  \"print 'BTR-FAILURE kinetic energy ${btr_ekin} J above the bound ${btr_bound} J at t = ${btr_time} s'\" "
-         "quit\n"
+      << check_run(c)
       << "if \"${btr_phi} >= " << target << "\" then &\n"
       << "  \"print 'BTR-COMPACTION-SLAB" << of << " reached t = ${btr_time} s phi = ${btr_phi}'\" &\n"
       << "  \"variable btr_slabs_reached equal ${btr_slabs_reached}+1\" &\n"
@@ -149,10 +153,7 @@ std::string liggghts_compaction_loop(const CompactionPlan& c, const Scene& scene
     s << "variable btr_crest equal ${btr_time}+" << g17(arming_time) << "\n"
       << "label btr_compact_" << n << "\n"
       << "variable btr_compact_check_" << n << " loop " << c.max_checks_per_scale << "\n"
-      << "run " << c.steps_per_check << " pre no post no\n"
-      << "if \"${btr_ekin} > ${btr_bound}\" then &\n"
-      << "  \"print 'BTR-FAILURE kinetic energy ${btr_ekin} J above the bound ${btr_bound} J at t = ${btr_time} s'\" "
-         "quit\n"
+      << check_run(c)
       << "if \"${btr_phi} >= " << target << "\" then &\n"
       << "  \"print 'BTR-COMPACTION-END reached friction x " << scale << " t = ${btr_time} s phi = ${btr_phi}'\" &\n"
       << "  \"jump SELF btr_compaction_done\"\n"

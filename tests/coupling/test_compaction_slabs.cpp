@@ -13,28 +13,15 @@
 #include "coupling/dem/relax_target.h"
 #include "coupling/dem/settle_plan.h"
 #include "coupling/engines.h"
+#include "rained_bed.h"
 #include "relax_fixtures.h"
 #include "relaxation_checks.h"
 
 namespace {
 
-// 800 grains (r 0.8-1.2 mm) rained by BTR into a 12 mm periodic cell: about 18 largest diameters deep, room for
-// two slabs with a bulk window each.
-struct Bed {
-  btr::Scene scene;
-  btr::Packing packing;
-};
-
-Bed deep_bed() {
-  Bed b;
-  b.scene = btr_test::make_scene("slabs", 3, btr_test::container(btr::ContainerKind::Periodic, 0.012, 0.012));
-  b.scene.source.kind = btr::SourceSpec::Kind::Rain;
-  b.scene.grains.components[0].material.young = 5e6;
-  b.scene.relax.max_time = 1.0;
-  b.packing.grains = btr::run_scene(b.scene, 3, 800, {}).grains;
-  b.packing.meta = {{"scene", btr::scene_to_json(b.scene)}, {"dimension", 3}};
-  return b;
-}
+// 800 grains: about 18 largest diameters deep, room for two slabs with a bulk window each.
+using Bed = btr_test::RainedBed;
+Bed deep_bed() { return btr_test::rained_bed("slabs", 800); }
 
 btr::RelaxSettings slabs(double phi, int count) {
   btr::RelaxSettings s;

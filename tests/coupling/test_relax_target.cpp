@@ -15,6 +15,7 @@
 #include "coupling/engines.h"
 #include "coupling/liggghts/liggghts_script.h"
 #include "coupling/yade/yade_script.h"
+#include "rained_bed.h"
 #include "relax_fixtures.h"
 #include "relaxation_checks.h"
 
@@ -23,23 +24,10 @@ namespace {
 using btr_test::have_engine;
 std::string read(const std::string& path) { return btr_test::read_text(path); }
 
-// 400 grains rained by BTR into a 12 mm periodic cell: deep enough (about 9 largest diameters) for a
-// bulk window 3 largest diameters from the floor and the surface.
-struct Bed {
-  btr::Scene scene;
-  btr::Packing packing;
-};
-
-Bed btr_bed() {
-  Bed b;
-  b.scene = btr_test::make_scene("target_phi", 3, btr_test::container(btr::ContainerKind::Periodic, 0.012, 0.012));
-  b.scene.source.kind = btr::SourceSpec::Kind::Rain;
-  b.scene.grains.components[0].material.young = 5e6;
-  b.scene.relax.max_time = 1.0;
-  b.packing.grains = btr::run_scene(b.scene, 3, 400, {}).grains;
-  b.packing.meta = {{"scene", btr::scene_to_json(b.scene)}, {"dimension", 3}};
-  return b;
-}
+// 400 grains rained by BTR: deep enough (about 9 largest diameters) for a bulk window 3 largest diameters from
+// the floor and the surface.
+using Bed = btr_test::RainedBed;
+Bed btr_bed() { return btr_test::rained_bed("target_phi", 400); }
 
 // The packing fraction the engine measured at the compaction's first check: LIGGGHTS' first thermo row (its
 // last column is v_btr_phi), YADE's "compaction: first check" line.
