@@ -10,10 +10,11 @@ constexpr double kForceEps = 1e-12;
 constexpr double kFeasibleEps = 1e-12;
 
 // The dot products the subsets share, computed once per descent (the same products, so the same bits).
+// Only the first count rows are set (and read).
 struct Products {
   double gram[kMaxContacts][kMaxContacts];
   double rhs[kMaxContacts];  // -n_i . g
-  Products(const Vec3* n, std::size_t count) : rhs{} {
+  Products(const Vec3* n, std::size_t count) {
     const Vec3 g(0.0, 0.0, -1.0);
     for (std::size_t i = 0; i < count; ++i) {
       rhs[i] = -n[i].dot(g);
@@ -63,10 +64,7 @@ bool try_subset(const Vec3* n, const Products& p, std::size_t count, unsigned ma
   for (std::size_t i = 0; i < count; ++i)
     if (!(mask & (1u << i)) && n[i].dot(d) < -kFeasibleEps) return false;
   out.direction = d.norm() < 1e-12 ? Vec3::Zero() : d;
-  for (int a = 0; a < k; ++a) {
-    out.force[idx[a]] = lambda[a];
-    out.loaded[idx[a]] = lambda[a] > kForceEps;
-  }
+  for (int a = 0; a < k; ++a) out.loaded[idx[a]] = lambda[a] > kForceEps;
   return true;
 }
 
@@ -79,19 +77,24 @@ Descent descend(const Vec3* normals, std::size_t count) {
   // direction) are deterministic.
   const int n = static_cast<int>(count);
   const Products p(normals, count);
+  // Every path returns `out` itself, so it is built in the caller's Descent (no copy).
   Descent out;
-  if (try_subset(normals, p, count, 0u, out)) return out;
-  for (int a = 0; a < n; ++a)
-    if (try_subset(normals, p, count, 1u << a, out)) return out;
-  for (int b = 1; b < n; ++b)
-    for (int a = 0; a < b; ++a)
-      if (try_subset(normals, p, count, (1u << a) | (1u << b), out)) return out;
-  for (int c = 2; c < n; ++c)
-    for (int b = 1; b < c; ++b)
+  auto search = [&] {  // stops at the first feasible subset
+    if (try_subset(normals, p, count, 0u, out)) return;
+    for (int a = 0; a < n; ++a)
+      if (try_subset(normals, p, count, 1u << a, out)) return;
+    for (int b = 1; b < n; ++b)
       for (int a = 0; a < b; ++a)
-        if (try_subset(normals, p, count, (1u << a) | (1u << b) | (1u << c), out)) return out;
-  // Only reachable through round-off with more than three nearly dependent contacts: carried.
-  return Descent{};
+        if (try_subset(normals, p, count, (1u << a) | (1u << b), out)) return;
+    for (int c = 2; c < n; ++c)
+      for (int b = 1; b < c; ++b)
+        for (int a = 0; a < b; ++a)
+          if (try_subset(normals, p, count, (1u << a) | (1u << b) | (1u << c), out)) return;
+  };
+  // Unsolved only through round-off with more than three nearly dependent contacts: carried (`out` is
+  // then still fresh, as try_subset writes it only for its answer).
+  search();
+  return out;
 }
 
 }  // namespace btr

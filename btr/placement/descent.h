@@ -17,7 +17,6 @@ struct Descent {
   Vec3 direction = Vec3::Zero();  // unnormalised; zero when the weight is carried
   // loaded[i] is true for the contacts that carry load (positive multiplier) and stay active.
   std::array<bool, kMaxContacts> loaded{};
-  std::array<double, kMaxContacts> force{};  // normal force of each contact, in units of the weight
 };
 
 // normals[i] is the unit normal of contact i; at most kMaxContacts contacts (more: std::length_error).
