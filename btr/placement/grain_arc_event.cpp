@@ -55,7 +55,9 @@ void offer_grains_on_arc(const NeighbourGrid& grid, double r, double r_max, cons
     Vec3 plo, phi;
     part.bounds(plo, phi);
     if (t0 == 0.0) plo = plo.cwiseMin(start), phi = phi.cwiseMax(start);  // the start exactly, whatever round-off
-    grid.visit_box(plo - reach, phi + reach, [&](std::int32_t i, const Vec3& c, double radius, int image) {
+    // The box and r copied into the visitor: read from it directly at every entry (offer_sphere's stores
+    // may alias them as far as the compiler knows, so they are reloaded, but not through a pointer).
+    grid.visit_box(plo - reach, phi + reach, [plo, phi, r, &offer_sphere](std::int32_t i, const Vec3& c, double radius, int image) {
       const double R = r + radius;
       if ((c - c.cwiseMax(plo).cwiseMin(phi)).squaredNorm() > R * R) return;  // too far from the part's box
       Obstacle o;
