@@ -215,7 +215,7 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
         {"value", c.settings.compaction_slabs},
         {"from", "btr settle: a bed deeper than " + g6(kDeepBedDepth) + " largest diameters is compacted slab by slab "
                  "from the floor up, each at most " + g6(kDampingAnchorDepth) + " largest diameters deep (where the "
-                 "compaction damping was measured), as a pour builds it (docs/settle/README.md, \"Deep beds\")"}};
+                 "compaction damping was measured), as a pour builds it (docs/settle/deep/README.md)"}};
   const std::string warning = settle_depth_warning(depth, c.settings.compaction_slabs);
   if (!warning.empty()) c.record["compaction_damping"]["warning"] = warning;
   return c;
