@@ -119,7 +119,7 @@ TypeTable make_types(const Scene& scene, bool twins = false) {
   t.type_material.push_back(wall_material(scene));
   t.wall_type = static_cast<int>(t.type_material.size());
   if (twins) {
-    t.first_twin = t.wall_type + 1;
+    t.first_twin = liggghts_slab_twin_type(scene, 0);
     for (const Component& c : scene.grains.components) t.type_material.push_back(c.material);
   }
   return t;
@@ -310,18 +310,17 @@ int liggghts_slab_twin_type(const Scene& scene, std::size_t component) {
   return static_cast<int>(scene.grains.components.size() + 2 + component);
 }
 
-// With slab twins, only the pairs with a twin are scaled: the matrix of the scene's values, then every row and
-// column of a twin replaced by the matrix of the scaled scene.
+// Every pair scaled, or with slab twins only the pairs with a twin (the others keep the scene's values).
 std::string liggghts_friction_fixes(const Scene& scene, double scale, bool slab_twins) {
-  const TypeTable full = make_types(slab_twins ? scene : with_friction_scaled(scene, scale), slab_twins);
+  const TypeTable full = make_types(scene, slab_twins);
   const TypeTable scaled = make_types(with_friction_scaled(scene, scale), slab_twins);
   auto matrix = [&](auto get) {
     const int n = static_cast<int>(full.type_material.size());
     std::string s = " " + std::to_string(n);
     for (int i = 1; i <= n; ++i)
       for (int j = 1; j <= n; ++j) {
-        const bool twin = full.first_twin > 0 && (i >= full.first_twin || j >= full.first_twin);
-        s += " " + g17(pair_value(twin ? scaled : full, i, j, get, get));
+        const bool scaled_pair = !slab_twins || i >= full.first_twin || j >= full.first_twin;
+        s += " " + g17(pair_value(scaled_pair ? scaled : full, i, j, get, get));
       }
     return s;
   };
