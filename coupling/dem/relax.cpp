@@ -267,7 +267,11 @@ std::vector<std::string> write_engine_inputs(const Packing& packing, const Scene
     std::cout << ", damping " << g6(plan.compaction.damping) << ", time step " << g6(plan.compaction.timestep)
               << " s, window z in ["
               << g6(plan.compaction.window_lo.z()) << ", " << g6(plan.compaction.window_hi.z()) << "] m, every "
-              << plan.compaction.steps_per_check << " steps\n";
+              << plan.compaction.steps_per_check << " steps"
+              << (plan.compaction.slabs.empty() ? std::string()
+                                                : ", in " + std::to_string(plan.compaction.slabs.size()) +
+                                                      " slabs from the floor up (their windows tile it)")
+              << "\n";
   }
   if (plan.has_region)
     std::cout << "open floor: grains leaving x in [" << g6(plan.region_lo[0]) << ", " << g6(plan.region_hi[0]) << "]"
