@@ -76,7 +76,8 @@ std::string check_run(const CompactionPlan& c) {
 
 // CompactionPlan::slabs, slab by slab: the slab's grains (btr_slab) take their species' twin type, the grains up
 // to its last join btr_released (the integrator's group), and the check loop runs on its window until the target
-// or rest; then the slab's grains take their species' type again. Each slab prints "BTR-COMPACTION-SLAB k K
+// or rest; then the slab's grains take their species' type again. The grains above (btr_held) never move, so the
+// pairs between two of them are left out of the pair list: their forces act on no integrated grain. Each slab prints "BTR-COMPACTION-SLAB k K
 // reached|rest|max-time t = T s phi = P", and after the last "BTR-COMPACTION-END reached|not-reached ..." (reached:
 // every slab did).
 std::string slab_loop(const CompactionPlan& c, const Scene& scene, double arming_time) {
@@ -95,6 +96,10 @@ std::string slab_loop(const CompactionPlan& c, const Scene& scene, double arming
                       last = std::to_string(slab.last + 1), of = " " + id + " " + std::to_string(n);
     s << "group btr_released id <> 1 " << last << "\n";
     if (k == 0) s << "fix btr_integrate btr_released nve/sphere\n";
+    if (k > 0) s << "neigh_modify exclude none\n"
+                 << "group btr_held delete\n";
+    if (k + 1 < n) s << "group btr_held id > " << last << "\n"
+                     << "neigh_modify exclude group btr_held btr_held\n";
     s << "group btr_slab id <> " << first << " " << last << "\n";
     for (std::size_t t = 0; t < n_species; ++t)
       s << "group btr_slab_" << t + 1 << " intersect btr_slab btr_species_" << t + 1 << "\n"

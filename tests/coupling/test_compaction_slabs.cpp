@@ -58,7 +58,9 @@ TEST(CompactionSlabs, PlanCutsTheBedInDropOrderWithWindowsFromTheFloorUp) {
       EXPECT_EQ(s.last + 1, b.packing.grains.size() * (k + 1) / c.slabs.size()) << "equal grain counts";
       EXPECT_LT(s.window_lo_z, s.window_hi_z);
       EXPECT_NEAR(s.window_measure, cross_section * (s.window_hi_z - s.window_lo_z), 1e-18);
-      if (k > 0) EXPECT_DOUBLE_EQ(s.window_lo_z, c.slabs[k - 1].window_hi_z) << "the windows tile the bed";
+      if (k > 0) {
+        EXPECT_DOUBLE_EQ(s.window_lo_z, c.slabs[k - 1].window_hi_z) << "the windows tile the bed";
+      }
       // Inside the bed of the slab's drops: at least a largest diameter below its highest centre.
       EXPECT_LT(s.window_hi_z, top_centre(b.packing.grains, s.last) - 2.4e-3);
     }
@@ -102,6 +104,15 @@ TEST(CompactionSlabs, LiggghtsScriptGivesTheSlabItsTwinTypeAndHoldsTheGrainsAbov
   EXPECT_LT(second, twin2);
   EXPECT_LT(twin2, end);
   EXPECT_LT(end, restored);
+  // the held grains' pairs among themselves leave the pair list while they are held, and come back after
+  const std::size_t held = in.find("group btr_held id > 400\n"), excluded = in.find("neigh_modify exclude group btr_held btr_held\n");
+  const std::size_t back = in.find("neigh_modify exclude none\n");
+  for (std::size_t at : {held, excluded, back}) ASSERT_NE(at, std::string::npos) << in;
+  EXPECT_LT(first, held);
+  EXPECT_LT(held, excluded);
+  EXPECT_LT(excluded, second);
+  EXPECT_LT(back, twin2);
+  EXPECT_EQ(in.find("group btr_held id", held + 1), std::string::npos) << "the last slab holds nothing";
   EXPECT_NE(in.find("set group btr_slab_1 type 3", twin1), std::string::npos);
   EXPECT_NE(in.find("set group btr_slab_1 type 1", twin1), std::string::npos);
   EXPECT_NE(in.find("variable btr_phi equal c_btr_bulk_volume/v_btr_wmeasure"), std::string::npos);
