@@ -1,11 +1,43 @@
 #include "coupling/liggghts/liggghts_compaction.h"
 
 #include <sstream>
+#include <stdexcept>
 
 #include "btr/model/number_text.h"
+#include "coupling/dem/materials.h"
 #include "coupling/liggghts/liggghts_script.h"
 
 namespace btr {
+
+double liggghts_compaction_drag_rate(const Grains& grains, const Scene& scene, double damping) {
+  const std::vector<double> gamma = liggghts_damping_gamma(grains, scene, damping);
+  double sum = 0.0;
+  long n = 0;
+  for (std::size_t t = 0; t < scene.grains.components.size(); ++t) {
+    const Component& c = scene.grains.components[t];
+    double r = 0.0;
+    long count = 0;
+    for (const Grain& g : grains)
+      if (g.species == c.species) r += g.r, ++count;
+    if (count == 0) continue;
+    sum += static_cast<double>(count) * gamma[t] / grain_mass(r / static_cast<double>(count), c.density);
+    n += count;
+  }
+  if (n == 0) throw std::invalid_argument("compaction drag: no grain of the scene's species");
+  return sum / static_cast<double>(n);
+}
+
+std::string liggghts_compaction_drag_fix(const Grains& grains, const Scene& scene, double damping) {
+  const double c = liggghts_compaction_drag_rate(grains, scene, damping);
+  const std::string rate = g17(c);
+  std::string s = "# The compaction's drag, damping " + g6(damping) + ": F = -c m v, one rate c = " + g6(c) +
+                  " 1/s for every grain (the mean of gamma / m over\n"
+                  "# the species' mean grains, gamma as in fix viscous), so that grains of every size fall through the pores\n"
+                  "# alike; a coefficient per species let the large ones sink past the small (coupling/README.md).\n";
+  for (const char* k : {"x", "y", "z"})
+    s += "variable btr_drag_" + std::string(k) + " atom -" + rate + "*mass*v" + k + "\n";
+  return s + "fix " + kCompactionDampingFix + " all addforce v_btr_drag_x v_btr_drag_y v_btr_drag_z\n";
+}
 
 std::string liggghts_compaction_setup(const CompactionPlan& c, int dimension) {
   std::ostringstream s;
@@ -67,9 +99,9 @@ std::string liggghts_compaction_setup(const CompactionPlan& c, int dimension) {
 
 namespace {
 
-// A check's steps, then the blow-up bound.
+// A check's steps, then the blow-up bound. The drag (an addforce of atom-style variables) needs each run set up.
 std::string check_run(const CompactionPlan& c) {
-  return "run " + std::to_string(c.steps_per_check) + " pre no post no\n"
+  return "run " + std::to_string(c.steps_per_check) + (c.damping > 0 ? " post no\n" : " pre no post no\n") +
          "if \"${btr_ekin} > ${btr_bound}\" then &\n"
          "  \"print 'BTR-FAILURE kinetic energy ${btr_ekin} J above the bound ${btr_bound} J at t = ${btr_time} s'\" quit\n";
 }

@@ -332,17 +332,13 @@ std::string liggghts_friction_fixes(const Scene& scene, double scale, bool slab_
   return s;
 }
 
-std::string liggghts_viscous_fix(const std::string& id, const Grains& grains, const Scene& scene, double damping,
-                                 bool slab_twins) {
+std::string liggghts_viscous_fix(const std::string& id, const Grains& grains, const Scene& scene, double damping) {
   const std::vector<double> gamma = liggghts_damping_gamma(grains, scene, damping);
   std::string s = "# Damping " + g6(damping) + " (YADE's NewtonIntegrator damping): F = -gamma v with, per species,\n"
                   "# gamma = 2 (damping / pi) sqrt(k m) (k: contact stiffness of a mean grain under its weight),\n"
                   "# the viscous damping that dissipates the same energy per oscillation (coupling/README.md).\n"
                   "fix " + id + " all viscous " + g17(gamma[0]);
   for (std::size_t t = 1; t < gamma.size(); ++t) s += " scale " + std::to_string(t + 1) + " " + g17(gamma[t] / gamma[0]);
-  if (slab_twins)
-    for (std::size_t t = 1; t < gamma.size(); ++t)
-      s += " scale " + std::to_string(liggghts_slab_twin_type(scene, t)) + " " + g17(gamma[t] / gamma[0]);
   return s + "\n";
 }
 
@@ -541,7 +537,7 @@ std::vector<std::string> write_liggghts_inputs(const Packing& packing, const Sce
   }
   s << "fix btr_gravity all gravity " << g17(kGravity) << " vector 0.0 0.0 -1.0\n";
   if (compaction.enabled && compaction.damping > 0)
-    s << liggghts_viscous_fix(kCompactionDampingFix, grains, scene, compaction.damping, slabs);
+    s << liggghts_compaction_drag_fix(grains, scene, compaction.damping);
   else if (!compaction.enabled && plan.damping > 0)
     s << liggghts_viscous_fix("btr_damping", grains, scene, plan.damping);
   if (dim == 2) s << "fix btr_plane all setforce NULL 0.0 NULL   # after the walls and gravity\n";

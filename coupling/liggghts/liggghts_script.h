@@ -51,10 +51,8 @@ std::string liggghts_friction_fixes(const Scene& scene, double scale = 1.0, bool
 // The type a grain of the scene's component (0-based) takes while its slab is compacted (liggghts_friction_fixes).
 int liggghts_slab_twin_type(const Scene& scene, std::size_t component);
 
-// "fix ID all viscous ..." (with its comment): the damping `damping` as liggghts_damping_gamma computes it
-// (`slab_twins`: the twin types scaled as their species).
-std::string liggghts_viscous_fix(const std::string& id, const Grains& grains, const Scene& scene, double damping,
-                                 bool slab_twins = false);
+// "fix ID all viscous ..." (with its comment): the damping `damping` as liggghts_damping_gamma computes it.
+std::string liggghts_viscous_fix(const std::string& id, const Grains& grains, const Scene& scene, double damping);
 
 // "fix ID all addforce ..." with its three atom-style variables (and comment): YADE's NewtonIntegrator damping
 // itself, each force component reduced by damping x |F_k| in the direction of motion. It must be defined after

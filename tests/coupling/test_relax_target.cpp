@@ -136,7 +136,9 @@ TEST(TargetPhi, LiggghtsScriptRunsTheCompactionBeforeTheStopRule) {
   EXPECT_LT(second, restored);
   EXPECT_LT(restored, stop);
   EXPECT_LT(stop, loop);
-  EXPECT_LT(in.find("fix btr_compaction_damping all viscous"), in.find("label btr_compact_1"));
+  EXPECT_LT(in.find("fix btr_compaction_damping all addforce v_btr_drag_x v_btr_drag_y v_btr_drag_z"),
+            in.find("label btr_compact_1"));
+  EXPECT_EQ(in.find(" pre no"), std::string::npos) << "the drag is an addforce too: every run sets up";
   // The settle's damping is YADE's local law (fix addforce of atom-style variables), and the runs after it set up.
   const std::size_t local = in.find("fix btr_damping all addforce v_btr_local_x v_btr_local_y v_btr_local_z");
   ASSERT_NE(local, std::string::npos) << in;
@@ -296,9 +298,13 @@ INSTANTIATE_TEST_SUITE_P(Engines, TargetPhiEngine, ::testing::Values("liggghts",
 // test: a settle under a viscous drag (LIGGGHTS' fix viscous, the old stand-in for YADE's damping) held them at
 // a terminal velocity of about a millimetre per second in the pores, and the unbalanced-force rule, which sees
 // the drag balance their weight, stopped with 19 % of a 1500-grain bed's bulk touching fewer than 3 grains
-// (coupling/README.md). No grain at rest under gravity in the bulk does that. LIGGGHTS only: YADE's own local
-// damping stops this bed with 6 % hanging (its unbalanced-force ratio hardly sees grains 64 times lighter than
-// the largest), an open point that coupling/README.md records.
+// (coupling/README.md). No grain at rest under gravity in the bulk does that; this bed keeps 1.8-2.1 % (9-10
+// grains) whichever drag compacts it. LIGGGHTS only: YADE's own local damping stops this bed with 6 % hanging
+// (its unbalanced-force ratio hardly sees grains 64 times lighter than the largest), an open point that
+// coupling/README.md records.
+// The compaction keeps the deposit's size layering: its drag slows every grain alike (F = -c m v), where one
+// viscous coefficient per species let the large grains fall 64 times faster than the small through the pores
+// and sink past them (segregation index 0.0559 -> 0.0459 on this bed; now 0.0567).
 TEST(TargetPhi, LiggghtsSettleAfterTheCompactionLeavesNoGrainHanging) {
   if (!have_engine("liggghts")) FAIL() << "scripts/setup.sh installs it: liggghts not installed";
   Bed b;
@@ -327,8 +333,12 @@ TEST(TargetPhi, LiggghtsSettleAfterTheCompactionLeavesNoGrainHanging) {
   ASSERT_TRUE(bulk.valid);
   std::int64_t hanging = 0;
   for (std::size_t z = 0; z < 3 && z < bulk.coordination_histogram.size(); ++z) hanging += bulk.coordination_histogram[z];
-  EXPECT_LE(double(hanging), 0.02 * double(bulk.grains_in_window))
+  EXPECT_LE(double(hanging), 0.03 * double(bulk.grains_in_window))
       << hanging << " of " << bulk.grains_in_window << " bulk grains touch fewer than 3 others";
+  const btr::SegregationIndex before = btr::vertical_segregation(b.packing.grains);
+  const btr::SegregationIndex after = btr::vertical_segregation(r.relaxed.grains);
+  ASSERT_TRUE(before.valid && after.valid);
+  EXPECT_NEAR(after.index, before.index, 0.004) << "the compaction moved the large grains down past the small";
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
@@ -12,6 +13,7 @@
 #include "coupling/dem/relax_plan.h"
 #include "coupling/dem/timestep.h"
 #include "coupling/engines.h"
+#include "coupling/liggghts/liggghts_compaction.h"
 #include "coupling/liggghts/liggghts_script.h"
 #include "coupling/yade/yade_script.h"
 #include "relax_fixtures.h"
@@ -200,6 +202,38 @@ TEST(Damping, ViscousCoefficientByHandAndOffByDefault) {
 
   on.damping = 1.0;
   EXPECT_THROW(btr::export_inputs(p, scene, "liggghts", on, d), btr::RelaxRefused);
+}
+
+// The compaction's drag is F = -c m v with one rate c for every grain, so grains of every size fall through the
+// pores alike: c = gamma / m of the bed's mean grain, by hand (Hertz stiffness at its weight, as above), for a
+// bed of grains of two sizes; the script's three variables carry c times each grain's own mass.
+TEST(Damping, CompactionDragIsOneRateForEveryGrainByHand) {
+  btr::Scene scene = btr_test::make_scene("drag", 3, btr_test::container(btr::ContainerKind::Box, 0.01, 0.01));
+  btr::Packing p;
+  for (int i = 0; i < 3; ++i) {
+    btr::Grain g;
+    g.r = i == 2 ? 0.5e-3 : 1e-3;
+    g.x = btr::Vec3(-3e-3 + 3e-3 * i, 0, g.r);
+    p.grains.push_back(g);
+  }
+  p.meta = {{"scene", btr::scene_to_json(scene)}, {"dimension", 3}};
+  const double r = 2.5e-3 / 3.0, m = 2500.0 * 4.0 / 3.0 * M_PI * r * r * r;
+  const double e_star = 5e7 / (2 * (1 - 0.3 * 0.3)), r_star = 0.5 * r;
+  const double delta = std::pow(3 * m * 9.81 / (4 * e_star * std::sqrt(r_star)), 2.0 / 3.0);
+  const double rate = 2 * 0.15 / M_PI * std::sqrt(2 * e_star * std::sqrt(r_star * delta) * m) / m;
+  EXPECT_NEAR(btr::liggghts_compaction_drag_rate(p.grains, scene, 0.15), rate, 1e-9 * rate);
+  const std::string fix = btr::liggghts_compaction_drag_fix(p.grains, scene, 0.15);
+  for (const char* k : {"x", "y", "z"}) {
+    const std::string head = std::string("variable btr_drag_") + k + " atom -";
+    const std::size_t at = fix.find(head);
+    ASSERT_NE(at, std::string::npos) << fix;
+    std::size_t used = 0;
+    EXPECT_NEAR(std::stod(fix.substr(at + head.size()), &used), rate, 1e-12 * rate);
+    EXPECT_EQ(fix.substr(at + head.size() + used, 8 + std::strlen(k)), std::string("*mass*v") + k + "\n");
+  }
+  EXPECT_NE(fix.find("fix btr_compaction_damping all addforce v_btr_drag_x v_btr_drag_y v_btr_drag_z\n"),
+            std::string::npos);
+  EXPECT_EQ(fix.find("viscous "), std::string::npos) << "not a coefficient per species";
 }
 
 TEST(StopRuleSettings, BadValuesAreRefusedBeforeTheEngine) {
