@@ -44,6 +44,7 @@ Grains DrumStepper::step(const Grains& grains, double dphi) const {
   Grains out(grains.size());
   if (grains.empty()) return out;
   Deposition engine(dimension_, container_, r_max);
+  engine.reserve(static_cast<std::int64_t>(grains.size()), false);  // the grains' array allocated once
   // Every grain is lifted by the same amount, so the order by height is the order after rotation; the
   // engine keeps each lifted start inside the drum.
   // The drops gathered in that order first: a loop of independent reads, where reading each grain
@@ -54,13 +55,9 @@ Grains DrumStepper::step(const Grains& grains, double dphi) const {
     const Grain& g = moved[order[k]];
     drops[k] = Drop{g.x.x(), dimension_ == 3 ? g.x.y() : 0.0, g.r, g.species, g.x.z() + lift_};
   }
-  // As run_scene: the grid memory of the next two drops' falls is asked for while this one is placed.
-  for (std::size_t k = 0; k < drops.size(); ++k) {
-    if (k + 2 < drops.size()) engine.prefetch(drops[k + 2], 2);
-    if (k + 1 < drops.size()) engine.prefetch(drops[k + 1], 1);
-    engine.prefetch(drops[k], 0);
-    out[order[k]] = engine.place(drops[k]);
-  }
+  // No Deposition::prefetch here (run_scene asks for each fall's memory ahead): in a drum its three calls a drop
+  // cost more than they saved (docs/guide/bench.md, issue 22).
+  for (std::size_t k = 0; k < drops.size(); ++k) out[order[k]] = engine.place(drops[k]);
   return out;
 }
 
