@@ -8,6 +8,7 @@
 #include <map>
 #include <sstream>
 
+#include "coupling/dem/compaction_lines.h"
 #include "coupling/dem/dem_walls.h"
 #include "coupling/liggghts/liggghts_script.h"
 #include "coupling/liggghts/liggghts_tapping.h"
@@ -142,24 +143,7 @@ LiggghtsLog parse_liggghts_log(const std::string& path) {
         if (w[i] == "unbalanced-force") to_double(w[i + 1], log.final_unbalanced_force);
       continue;
     }
-    if (line.rfind("BTR-COMPACTION-END ", 0) == 0) {  // reached|not-reached friction x S t = T s phi = P
-      log.compaction.ran = true;
-      log.compaction.reached = w.size() > 1 && w[1] == "reached";
-      for (std::size_t i = 0; i + 2 < w.size(); ++i)
-        if (w[i] == "x") to_double(w[i + 1], log.compaction.friction_scale);
-        else if (w[i] == "t" && w[i + 1] == "=") to_double(w[i + 2], log.compaction.time);
-        else if (w[i] == "phi" && w[i + 1] == "=") to_double(w[i + 2], log.compaction.packing_fraction);
-      continue;
-    }
-    if (line.rfind("BTR-COMPACTION-SLAB ", 0) == 0) {  // k K reached|rest|max-time t = T s phi = P
-      RelaxResult::Compaction::Slab slab;
-      slab.reached = w.size() > 3 && w[3] == "reached";
-      for (std::size_t i = 0; i + 2 < w.size(); ++i)
-        if (w[i] == "t" && w[i + 1] == "=") to_double(w[i + 2], slab.time);
-        else if (w[i] == "phi" && w[i + 1] == "=") to_double(w[i + 2], slab.packing_fraction);
-      log.compaction.slabs.push_back(slab);
-      continue;
-    }
+    if (read_compaction_line(line, log.compaction)) continue;
     if (line.rfind("BTR-STOP ", 0) == 0) {
       log.stop_reason = w.size() > 1 ? w[1] : "";
       for (std::size_t i = 0; i + 2 < w.size(); ++i)
