@@ -81,6 +81,8 @@ except ImportError as exc:
 _materials = {}      # label -> material id
 _species = {}        # species -> material id
 _pairs = []          # (material id, material id, restitution, friction)
+_material_args = {}  # material id -> (label, young, poisson, density): what a slab twin copies
+_twins = {}          # a species' material id -> its twin's (a compaction in slabs; twin_materials())
 _grains = []         # [(packing id, body id)] in packing order
 _walls = []          # body ids of walls, facets and the periodic floor
 _floor = None        # body id of the floor (the plane wall or periodic floor box at z = 0), which TAP moves
@@ -103,6 +105,7 @@ def add_material(label, young, poisson, density, species=None):
         mat = ViscElMat(young=young, poisson=poisson, en=1.0, frictionAngle=0.0, density=density, label=label)
     mid = O.materials.append(mat)
     _materials[label] = mid
+    _material_args[mid] = (label, young, poisson, density)
     if species is not None:
         _species[species] = mid
 
@@ -226,9 +229,33 @@ def add_mesh(stl_name):
     _walls.extend(O.bodies.append(facets))
 
 
+def twin_materials():
+    """A compaction in slabs: each species' material gets a twin, the same material under another id, which the
+    grains of the slab being compacted take (the LIGGGHTS script's twin types)."""
+    for mid in sorted(set(_species.values())):
+        label, young, poisson, density = _material_args[mid]
+        add_material(label + "_twin", young, poisson, density)
+        _twins[mid] = _materials[label + "_twin"]
+
+
+def pair_values(scale):
+    """(material id, material id, restitution, friction) of every pair the Ip2 functors may meet: friction scaled
+    by `scale` for every pair, or, with slab twins, only for the pairs with a twin (a slab grain against anything);
+    the others keep the scene's."""
+    if not _twins:
+        return [(a, b, e, mu * scale) for a, b, e, mu in _pairs]
+    out = []
+    for a, b, e, mu in _pairs:
+        for ta in (a, _twins.get(a)):
+            for tb in (b, _twins.get(b)):
+                if ta is not None and tb is not None:
+                    out.append((ta, tb, e, mu if (ta, tb) == (a, b) else mu * scale))
+    return out
+
+
 def friction_angles(scale):
-    """The Ip2 functors' friction angles of every material pair, friction scaled by `scale`."""
-    return MatchMaker(matches=[(a, b, math.atan(mu * scale)) for a, b, _, mu in _pairs])
+    """The Ip2 functors' friction angles of every material pair, friction scaled by `scale` (pair_values)."""
+    return MatchMaker(matches=[(a, b, math.atan(mu)) for a, b, _, mu in pair_values(scale)])
 
 
 _ip2 = None  # the Ip2 functor (its frictAngle is replaced when the compaction restores the friction)
@@ -237,7 +264,9 @@ _collider = None  # the collider (a pour's release re-sorts it after moving a ba
 
 def build_engines():
     global _ip2, _collider
-    en = MatchMaker(matches=[(a, b, e) for a, b, e, _ in _pairs])
+    if COMPACTION and COMPACTION.get("slabs"):
+        twin_materials()
+    en = MatchMaker(matches=[(a, b, e) for a, b, e, _ in pair_values(1.0)])
     friction_angle = friction_angles(COMPACTION["friction_scales"][0] if COMPACTION else 1.0)
     if MODEL == "hertz":
         ip2 = Ip2_FrictMat_FrictMat_MindlinPhys(en=en, frictAngle=friction_angle)
@@ -381,23 +410,25 @@ def grain_part_between(z, r, a, b):
     return r * r * (ub * math.sqrt(1.0 - ub * ub) + math.asin(ub) - ua * math.sqrt(1.0 - ua * ua) - math.asin(ua))
 
 
-def bulk_packing_fraction():
+def bulk_packing_fraction(z_window=None):
     """Solid fraction (area fraction in 2D) of COMPACTION's window (the LIGGGHTS script's variable btr_phi): each
     grain's part between its planes in z, times, in walled containers, its fraction between the side planes in x
-    (and y in 3D): exact where one side cuts a grain, the product's approximation where two do."""
+    (and y in 3D): exact where one side cuts a grain, the product's approximation where two do. z_window: (z from,
+    z to, measure) in place of the window's own (a slab's)."""
     c = COMPACTION
     lo, hi = c["window_lo"], c["window_hi"]
+    z_lo, z_hi, measure = z_window if z_window else (lo[2], hi[2], c["window_measure"])
     solid = 0.0
     for _, b in present_grains():
         p, r = b.state.pos, b.shape.radius
-        part = grain_part_between(p[2], r, lo[2], hi[2])
+        part = grain_part_between(p[2], r, z_lo, z_hi)
         if part and not c["slab"]:
             whole = grain_part_between(0.0, r, -r, r)
             part *= grain_part_between(p[0], r, lo[0], hi[0]) / whole
             if DIMENSION == 3:
                 part *= grain_part_between(p[1], r, lo[1], hi[1]) / whole
         solid += part
-    return solid / c["window_measure"]
+    return solid / measure
 
 
 class Compaction:
@@ -406,7 +437,12 @@ class Compaction:
     fraction checked at every sample; at the target, or when the last scale has brought the bed to rest (kinetic
     energy and its mean over STEPS_PER_CHECK steps below COMPACTION["rest_kinetic"], after the arming time of the
     scale) or used max_time, the friction of every pair and contact is restored, every grain stopped, DAMPING
-    set, and the stop rule armed anew."""
+    set, and the stop rule armed anew.
+    In slabs (COMPACTION["slabs"], settle's deep beds): slab k's grains are released and take their twin
+    material (frictionless against anything), the grains above are held (blockedDOFs "xyzXYZ", as a pour's
+    lattice), and the same checks run on slab k's window; at its target, at rest or after max_time its grains
+    take their material back, "BTR-COMPACTION-SLAB k K reached|rest|max-time ..." is logged and the next slab
+    released; after the last, as above."""
 
     def __init__(self, rule):
         self.rule = rule
@@ -416,23 +452,76 @@ class Compaction:
         self.recent = []
         self.rest_from = COMPACTION["arming"] if COMPACTION else 0.0
         self.outcome = None
+        self.slabs = COMPACTION.get("slabs") if COMPACTION else None
+        self.slab = 0             # the slab being compacted
+        self.slabs_reached = 0
+
+    def start(self):
+        """Before the first step: in slabs, every grain above the first slab held, the first released."""
+        if not self.slabs:
+            return
+        for _, bid in _grains[self.slabs[0][1]:]:
+            b = O.bodies[bid]
+            b.state.blockedDOFs = "xyzXYZ"
+            b.state.vel = Vector3(0.0, 0.0, 0.0)
+            b.state.angVel = Vector3(0.0, 0.0, 0.0)
+        log("compaction in %d slabs from the floor up: grains %d.. held" % (len(self.slabs), self.slabs[0][1] + 1))
+        self.release_slab(0, 0.0)
+
+    def slab_grains(self, k):
+        first, last = self.slabs[k][:2]
+        return [O.bodies[bid] for _, bid in _grains[first - 1:last] if O.bodies[bid] is not None]
+
+    def release_slab(self, k, t):
+        # The 2D grains keep their plane (add_grains' "yXZ"); `dynamic = True` would free every degree of freedom.
+        free = "yXZ" if DIMENSION == 2 else ""
+        for b in self.slab_grains(k):
+            b.state.blockedDOFs = free
+            b.material = O.materials[_twins[b.material.id]]
+        self.set_friction(self.scale())
+        self.slab, self.samples, self.recent, self.rest_from = k, 0, [], t + COMPACTION["arming"]
+        first, last, lo, hi, _ = self.slabs[k]
+        log("compaction: slab %d of %d (grains %d..%d) released at t = %.6g s, its pairs' friction x %g, window z "
+            "%.6g..%.6g m" % (k + 1, len(self.slabs), first, last, t, self.scale(), lo, hi))
+
+    def end_slab(self, how, t, phi):
+        """Slab self.slab ends (how: reached, rest or max-time): its grains take their own material back, then the
+        next slab is released or, after the last, the compaction finishes."""
+        k, n = self.slab, len(self.slabs)
+        log("BTR-COMPACTION-SLAB %d %d %s t = %.17g s phi = %.17g" % (k + 1, n, how, t, phi))
+        self.slabs_reached += how == "reached"
+        own = dict((twin, mid) for mid, twin in _twins.items())
+        for b in self.slab_grains(k):
+            b.material = O.materials[own[b.material.id]]
+        if k + 1 < n:
+            self.release_slab(k + 1, t)
+        else:
+            self.finish(self.slabs_reached == n, t, phi)
+
+    def scale(self):
+        return COMPACTION["friction_scales"][self.k]
 
     def step(self, t, e):
         """Called at every sample while active; returns True while the compaction goes on."""
         c = COMPACTION
-        phi = bulk_packing_fraction()
-        if self.k == 0 and self.samples == 0:
+        phi = bulk_packing_fraction(self.slabs[self.slab][2:] if self.slabs else None)
+        if self.k == 0 and self.slab == 0 and self.samples == 0:
             log("compaction: first check at t = %.6g s, phi %.6g" % (t, phi))
         self.samples += 1
         self.recent = (self.recent + [e])[-(STEPS_PER_CHECK // AVERAGE_EVERY):]
         if phi >= c["target"]:
-            self.finish(True, t, phi)
-            return False
+            if self.slabs:
+                self.end_slab("reached", t, phi)
+            else:
+                self.finish(True, t, phi)
+            return self.active
         at_rest = t >= self.rest_from and e < c["rest_kinetic"] and \
             sum(self.recent) / len(self.recent) < c["rest_kinetic"]
+        if self.slabs and (at_rest or self.samples >= c["max_samples_per_scale"]):
+            self.end_slab("rest" if at_rest else "max-time", t, phi)
+            return self.active
         if at_rest or self.samples >= c["max_samples_per_scale"]:
-            log("compaction: friction x %g at rest below the target at t = %.6g s, phi %.6g" % (
-                c["friction_scales"][self.k], t, phi))
+            log("compaction: friction x %g at rest below the target at t = %.6g s, phi %.6g" % (self.scale(), t, phi))
             if self.k + 1 == len(c["friction_scales"]):
                 self.finish(False, t, phi)
                 return False
@@ -440,23 +529,25 @@ class Compaction:
             self.samples = 0
             self.recent = []
             self.rest_from = t + c["arming"]
-            self.set_friction(c["friction_scales"][self.k])
+            self.set_friction(self.scale())
         return True
 
     def set_friction(self, scale):
+        """The Ip2 functor's friction for new contacts and every existing contact's, by its bodies' materials."""
         _ip2.frictAngle = friction_angles(scale)
         tangent = {}
-        for a, b, _, mu in _pairs:
-            tangent[(a, b)] = tangent[(b, a)] = mu * scale
+        for a, b, _, mu in pair_values(scale):
+            tangent[(a, b)] = tangent[(b, a)] = mu
         for i in O.interactions:
             if i.isReal:
                 i.phys.tangensOfFrictionAngle = tangent[(O.bodies[i.id1].material.id, O.bodies[i.id2].material.id)]
 
     def finish(self, reached, t, phi):
-        c = COMPACTION
-        scale = c["friction_scales"][self.k]
+        scale = self.scale()
         log("compaction %s: friction x %g, t = %.6g s, phi %.6g; friction restored, grains stopped, damping %g" % (
             "reached the target" if reached else "did NOT reach the target", scale, t, phi, DAMPING))
+        log("BTR-COMPACTION-END %s friction x %g t = %.17g s phi = %.17g" % (
+            "reached" if reached else "not-reached", scale, t, phi))
         self.set_friction(1.0)
         for b in O.bodies:
             if b is not None and b.dynamic:
@@ -847,9 +938,11 @@ def relax():
     t0 = time.time()
     if POUR:
         release(_rule)
+    _rule.compaction.start()
     steps = MAX_CHECKS * STEPS_PER_CHECK
-    if COMPACTION:  # each friction scale of the compaction may run up to max_time before the settle's max_time
-        steps += len(COMPACTION["friction_scales"]) * COMPACTION["max_samples_per_scale"] * AVERAGE_EVERY
+    if COMPACTION:  # each friction scale (slab) of the compaction may run up to max_time before the settle's
+        stages = len(COMPACTION.get("slabs") or COMPACTION["friction_scales"])
+        steps += stages * COMPACTION["max_samples_per_scale"] * AVERAGE_EVERY
     O.run(steps, True)  # returns when the rule pauses YADE (or at the last step)
     _loop_seconds = time.time() - t0
     if _rule.failure is not None:

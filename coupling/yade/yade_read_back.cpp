@@ -9,6 +9,7 @@
 #include <optional>
 #include <sstream>
 
+#include "coupling/dem/compaction_lines.h"
 #include "coupling/dem/dem_walls.h"
 #include "coupling/dem/overlap.h"
 #include "coupling/dem/relax_plan.h"
@@ -188,6 +189,16 @@ RelaxResult yade_read_back(const std::string& dir, const Packing& original, cons
   }
   if (plan.compaction.enabled && !result.compaction.ran)
     in.fail("the compaction to the target packing fraction did not end (no compaction record)");
+  if (plan.compaction.enabled && !plan.compaction.slabs.empty()) {
+    // Each slab's end is a line of the log, in the LIGGGHTS script's format (compaction_lines.h).
+    RelaxResult::Compaction logged;
+    std::ifstream log(fs::path(dir) / yade_files::kLog);
+    for (std::string line; std::getline(log, line);) read_compaction_line(line, logged);
+    if (logged.slabs.size() != plan.compaction.slabs.size())
+      in.fail(std::string(yade_files::kLog) + " has " + std::to_string(logged.slabs.size()) +
+              " BTR-COMPACTION-SLAB lines, the plan " + std::to_string(plan.compaction.slabs.size()) + " slabs");
+    result.compaction.slabs = logged.slabs;
+  }
 
   // Final state: one row per grain still in the run, in id order.
   const auto rows = in.csv(yade_files::kFinal, "id,x,y,z,vx,vy,vz");

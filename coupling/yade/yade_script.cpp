@@ -162,14 +162,25 @@ double verlet_distance(const Scene& scene, double skin, const PackingStats& st, 
   return std::min(skin, 0.9 * room);
 }
 
+// COMPACTION's slabs (CompactionPlan::slabs; nothing for the bed at once): per slab its first and last packing ids
+// (1-based, as POUR's batches) and its window's z bounds and measure.
+std::string slabs_entry(const CompactionPlan& c) {
+  if (c.slabs.empty()) return "";
+  std::string rows;
+  for (std::size_t k = 0; k < c.slabs.size(); ++k) {
+    const CompactionPlan::Slab& s = c.slabs[k];
+    rows += "\n        (" + std::to_string(k == 0 ? 1 : c.slabs[k - 1].last + 2) + ", " + std::to_string(s.last + 1) +
+            ", " + num(s.window_lo_z) + ", " + num(s.window_hi_z) + ", " + num(s.window_measure) + "),";
+  }
+  return ",\n    slabs=[  # compacted in turn from the floor up (class Compaction): (first id, last id, window z "
+         "from, to [m], measure)" + rows + "]";
+}
+
 // COMPACTION: None, or the plan's compaction to a target packing fraction (CompactionPlan), checked at every
 // sample of the stop rule (every AVERAGE_EVERY steps).
 std::string compaction_constant(const RelaxPlan& plan, const Grains& grains, const CheckSchedule& sched) {
   const CompactionPlan& c = plan.compaction;
   if (!c.enabled) return "COMPACTION = None  # no target packing fraction\n";
-  if (!c.slabs.empty())
-    throw RelaxRefused("the compaction in slabs (CompactionPlan::slabs, settle's deep beds) is written for LIGGGHTS "
-                       "only; compact the bed at once in YADE");
   std::string scales;
   for (double f : c.friction_scales) scales += (scales.empty() ? "" : ", ") + num(f);
   const long samples = std::max(1L, static_cast<long>(std::ceil(plan.max_time / c.timestep / sched.average_every)));
@@ -180,7 +191,7 @@ std::string compaction_constant(const RelaxPlan& plan, const Grains& grains, con
          "    slab=" + std::string(c.slab ? "True" : "False") + ", window_lo=" + vec(c.window_lo) + ", window_hi=" +
          vec(c.window_hi) + ", window_measure=" + num(c.window_measure) + ",\n"
          "    rest_kinetic=" + num(c.rest_kinetic) + ", max_samples_per_scale=" + std::to_string(samples) +
-         ", arming=" + num(stop_arming_time(grains)) + ")\n";
+         ", arming=" + num(stop_arming_time(grains)) + slabs_entry(c) + ")\n";
 }
 
 // POUR: None, or a reference pour's release (engine_adapter.h, PourRelease): batches as (first id, last id,

@@ -48,6 +48,21 @@ def test_grain_part_between_planes(library, dimension):
     assert library.grain_part_between(z, r, z + r - h, 10.0) == pytest.approx(cap)
 
 
+def test_slab_twins_make_only_their_pairs_frictionless(library):
+    """A compaction in slabs: a pair with a twin material (a slab grain against anything) takes the scaled
+    friction, every other pair the scene's; without twins every pair is scaled."""
+    library._pairs[:] = [(0, 0, 0.5, 0.5), (0, 1, 0.4, 0.3)]  # species 0 with itself and with the walls (1)
+    library._twins.clear()
+    assert sorted(library.pair_values(0.5)) == [(0, 0, 0.5, 0.25), (0, 1, 0.4, 0.15)]
+    library._twins[0] = 2
+    friction = {(a, b): mu for a, b, _, mu in library.pair_values(0.0)}
+    assert friction[(0, 0)] == 0.5 and friction[(0, 1)] == 0.3
+    assert friction[(2, 0)] == friction[(0, 2)] == friction[(2, 2)] == friction[(2, 1)] == 0.0
+    assert (1, 1) not in friction and (1, 2) not in friction  # walls have no twin
+    restitution = {(a, b): e for a, b, e, _ in library.pair_values(1.0)}
+    assert restitution[(2, 1)] == 0.4 and restitution[(2, 2)] == 0.5
+
+
 def test_write_atomically_leaves_only_the_file(library, tmp_path):
     library.write_atomically("out.txt", "one\n")
     library.write_atomically("out.txt", "two\n")
