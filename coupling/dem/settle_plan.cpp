@@ -131,15 +131,16 @@ CalibrationPlan calibration_plan(const Scene& scene, std::int64_t grains) {
   return plan;
 }
 
-std::string settle_depth_warning(double depth, int slabs) {
+std::string settle_depth_warning(double depth, int slabs, bool yade) {
   if (!(depth > kDeepBedDepth)) return "";
   const std::string deep = "this bed is " + g6(depth) + " largest diameters deep, beyond the " + g6(kDeepBedDepth) +
                            " settle was validated to (9.3-14.1): ";
   if (slabs > 1)
     return deep + "compacted in " + std::to_string(slabs) + " slabs from the floor up, as a pour builds it; "
-           "measured on one such bed only (39 largest diameters, docs/settle/deep): coordination and density "
-           "against height within its pours' scatter, packing fraction +0.002 over them (the target 0.0015 under "
-           "them, the settle 0.003 over its target); `btr pour` gives the reference";
+           "measured on one such bed only (39 largest diameters, docs/settle/deep" +
+           (yade ? ", in LIGGGHTS; YADE's slabs were not measured against pours" : "") +
+           "): coordination and density against height within its pours' scatter, packing fraction +0.002 over them "
+           "(the target 0.0015 under them, the settle 0.003 over its target); `btr pour` gives the reference";
   return deep + "deeper beds overshoot the target (bed3d at 42.3: phi +0.006 and Z "
          "+0.15 over its pours; at 141: +0.014, still moving 0.3 s after the switch), since the upper bed keeps "
          "collapsing after the compaction stops; `btr pour` gives the reference (docs/settle/README.md, \"Deep beds\")";
@@ -209,14 +210,14 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
                  "(LIGGGHTS: the same law by fix addforce, so that no grain is left hanging in a pore)"}}},
       {"stop_rule", stop_rule_record(scene, c.stop_rule)},
   };
-  c.settings.compaction_slabs = yade ? 1 : settle_compaction_slabs(depth);
+  c.settings.compaction_slabs = settle_compaction_slabs(depth);
   if (c.settings.compaction_slabs > 1)
     c.record["compaction_slabs"] = {
         {"value", c.settings.compaction_slabs},
         {"from", "btr settle: a bed deeper than " + g6(kDeepBedDepth) + " largest diameters is compacted slab by slab "
                  "from the floor up, each at most " + g6(kDampingAnchorDepth) + " largest diameters deep (where the "
                  "compaction damping was measured), as a pour builds it (docs/settle/deep/README.md)"}};
-  const std::string warning = settle_depth_warning(depth, c.settings.compaction_slabs);
+  const std::string warning = settle_depth_warning(depth, c.settings.compaction_slabs, yade);
   if (!warning.empty()) c.record["compaction_damping"]["warning"] = warning;
   return c;
 }

@@ -80,13 +80,13 @@ inline constexpr double kCompactionDamping = 0.075;
 // runs from the floor up, and the upper bed, not yet jammed at the switch, keeps collapsing after it. bed3d at
 // 42.3: phi 0.633 against the target 0.6268 and the pours' 0.6268, Z 5.67 against 5.520; at 141 (10^5 grains):
 // +0.014 in the compaction's window and the unbalanced force still 0.08 (threshold 0.001) 0.3 s after the switch;
-// at 39 (docs/settle/deep) 0.65 at the floor, 0.60 at the top. So LIGGGHTS compacts them in slabs
+// at 39 (docs/settle/deep) 0.65 at the floor, 0.60 at the top. So both engines compact them in slabs
 // (settle_compaction_slabs); settle serves them, and says what was measured (settle_depth_warning).
 inline constexpr double kDeepBedDepth = 1.5 * kDampingAnchorDepth;
 // "" for a bed at most kDeepBedDepth largest diameters deep; else the warning settle prints and records
-// (settle.json chosen.compaction_damping.warning).
-std::string settle_depth_warning(double depth_in_largest_diameters, int compaction_slabs = 1);
-// The slabs settle compacts a bed in (RelaxSettings::compaction_slabs, LIGGGHTS): 1 up to kDeepBedDepth largest
+// (settle.json chosen.compaction_damping.warning); `yade`: the engine is YADE, where the slabs were not measured.
+std::string settle_depth_warning(double depth_in_largest_diameters, int compaction_slabs = 1, bool yade = false);
+// The slabs settle compacts a bed in (RelaxSettings::compaction_slabs, either engine): 1 up to kDeepBedDepth largest
 // diameters, deeper ceil(depth / kDampingAnchorDepth), so each slab is at most as deep as the bed the compaction
 // damping was measured on. Compacted at once, a deeper bed collapses from the floor up and leaves a density
 // gradient (39 largest diameters: 0.65 at the floor, 0.60 at the top; its pour 0.62-0.63 throughout).

@@ -1,10 +1,11 @@
 // Deep beds compacted slab by slab (CompactionPlan::slabs, settle's beds deeper than kDeepBedDepth): the plan's
-// slabs and windows, the LIGGGHTS script's twin types and slab loop, settle's choice of the slab count, and the
-// slab compaction run for real in LIGGGHTS on a small deep BTR bed.
+// slabs and windows, the LIGGGHTS script's twin types and slab loop, the YADE script's slabs, settle's choice of the
+// slab count, and the slab compaction run for real in both engines on a small deep BTR bed.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "btr/measures/metrics.h"
@@ -132,15 +133,80 @@ TEST(CompactionSlabs, SettleCompactsBedsDeeperThanItsMeasuredDepthInSlabs) {
   EXPECT_EQ(deep.record["compaction_slabs"]["value"], 4);
   EXPECT_NE(deep.record["compaction_damping"]["warning"].get<std::string>().find("4 slabs"), std::string::npos);
   EXPECT_EQ(btr::settle_choices(s, 0.63, {}, 14.1, {}).settings.compaction_slabs, 1);
+  const std::string liggghts_warning = deep.record["compaction_damping"]["warning"];
+  EXPECT_EQ(liggghts_warning.find("YADE"), std::string::npos) << liggghts_warning;
   s.relax.engine = "yade";
-  EXPECT_EQ(btr::settle_choices(s, 0.63, {}, 50.0, {}).settings.compaction_slabs, 1) << "LIGGGHTS only";
+  const btr::SettleChoices yade = btr::settle_choices(s, 0.63, {}, 50.0, {});
+  EXPECT_EQ(yade.settings.compaction_slabs, 4) << "the same rule in YADE";
+  const std::string yade_warning = yade.record["compaction_damping"]["warning"];
+  EXPECT_NE(yade_warning.find("4 slabs"), std::string::npos) << yade_warning;
+  EXPECT_NE(yade_warning.find("YADE's slabs were not measured"), std::string::npos) << yade_warning;
+  EXPECT_EQ(btr::settle_choices(s, 0.63, {}, 14.1, {}).settings.compaction_slabs, 1);
 }
 
-TEST(CompactionSlabs, YadeRefusesSlabsBeforeWritingAnything) {
+// The slabs of COMPACTION in the YADE script, as read back from its text: the plan's ids (1-based) and windows,
+// to the last digit; the bed at once has none.
+TEST(CompactionSlabs, YadeScriptCarriesThePlansSlabs) {
   const Bed b = deep_bed();
   const double goal = btr::bulk_packing_fraction(b.packing.grains, b.scene, 2.0) + 0.03;
+  const btr::CompactionPlan plan = btr::plan_compaction(b.packing, b.scene, slabs(goal, 2), 1e-5, 1e-9);
+  ASSERT_EQ(plan.slabs.size(), 2u);
   const std::string dir = btr_test::fresh_dir("slabs_yade");
-  EXPECT_THROW(btr::export_inputs(b.packing, b.scene, "yade", slabs(goal, 2), dir), btr::RelaxRefused);
+  btr::export_inputs(b.packing, b.scene, "yade", slabs(goal, 2), dir);
+  const std::string script = btr_test::read_text(dir + "/relax_yade.py");
+  const std::size_t at = script.find("    slabs=[");
+  ASSERT_NE(at, std::string::npos) << script.substr(script.find("COMPACTION = "), 800);
+  EXPECT_LT(script.find("COMPACTION = dict("), at);
+  EXPECT_NE(script.find("friction_scales=[0]"), std::string::npos);
+  std::size_t pos = script.find('\n', at);
+  for (std::size_t k = 0; k < plan.slabs.size(); ++k) {
+    ASSERT_EQ(script.compare(pos, 10, "\n        ("), 0) << script.substr(at, 400);
+    std::size_t first = 0, last = 0;
+    double lo = 0, hi = 0, measure = 0;
+    ASSERT_EQ(std::sscanf(script.c_str() + pos + 10, "%zu, %zu, %lf, %lf, %lf)", &first, &last, &lo, &hi, &measure), 5);
+    EXPECT_EQ(first, k == 0 ? 1 : plan.slabs[k - 1].last + 2);
+    EXPECT_EQ(last, plan.slabs[k].last + 1);
+    EXPECT_EQ(lo, plan.slabs[k].window_lo_z);
+    EXPECT_EQ(hi, plan.slabs[k].window_hi_z);
+    EXPECT_EQ(measure, plan.slabs[k].window_measure);
+    pos = script.find('\n', pos + 1);
+  }
+  EXPECT_EQ(script.compare(pos - 2, 2, "])"), 0) << "two slabs, no more: " << script.substr(at, 400);
+  const std::string once_dir = btr_test::fresh_dir("slabs_yade_once");
+  btr::export_inputs(b.packing, b.scene, "yade", slabs(goal, 1), once_dir);
+  EXPECT_EQ(btr_test::read_text(once_dir + "/relax_yade.py").find("slabs=["), std::string::npos);
+}
+
+// Run for real in YADE, as in LIGGGHTS below: each slab reaches the target in turn (read back from the log's
+// BTR-COMPACTION-SLAB lines), the settled bed lands near it, no pair overlaps beyond the law's small overlaps.
+TEST(CompactionSlabs, YadeCompactsTheBedSlabBySlab) {
+  if (!btr_test::have_engine("yade")) FAIL() << "scripts/setup.sh installs it: yade not installed";
+  Bed b = deep_bed();
+  const double goal = btr::bulk_packing_fraction(b.packing.grains, b.scene, 2.0) + 0.025;
+  // settle's choices for YADE, which keep the run short: its damping, steps and stop rule
+  btr::RelaxSettings s = slabs(goal, 2);
+  s.compaction_damping = btr::kYadeCompactionDamping;
+  s.compaction_timestep_fraction = btr::kSettleCompactionTimestepFraction;
+  s.damping = 0.5;
+  b.scene.relax.timestep_fraction = btr::kSettleTimestepFraction3d;
+  b.scene.relax.stop_rule = "unbalanced-force";
+  const std::string dir = btr_test::fresh_dir("slabs_yade_run");
+  const btr::RelaxResult r = btr::relax(b.packing, b.scene, "yade", s, dir);
+  ASSERT_EQ(r.compaction.slabs.size(), 2u);
+  for (const auto& slab : r.compaction.slabs) {
+    EXPECT_TRUE(slab.reached);
+    EXPECT_GE(slab.packing_fraction, goal);
+  }
+  EXPECT_LT(r.compaction.slabs[0].time, r.compaction.slabs[1].time);
+  EXPECT_EQ(r.compaction.time, r.compaction.slabs[1].time) << "the compaction ends with its last slab";
+  EXPECT_TRUE(r.compaction.reached);
+  EXPECT_NE(r.stop_reason, "max-time");
+  EXPECT_NEAR(btr::bulk_packing_fraction(r.relaxed.grains, b.scene, 2.0), goal, 0.015);
+  ASSERT_EQ(r.relaxed.grains.size(), b.packing.grains.size());
+  EXPECT_LT(btr_test::largest_pair_overlap(r.relaxed.grains, b.scene.container, 3), 0.05);
+  const nlohmann::json meta = nlohmann::json::parse(btr_test::read_text(dir + "/relaxed.json"));
+  ASSERT_EQ(meta["target_phi"]["slabs"].size(), 2u);
+  EXPECT_EQ(meta["target_phi"]["slabs"][0]["reached"], true);
 }
 
 // Run for real: each slab reaches the target in turn, the settled bed lands near it (as the bed at once does,

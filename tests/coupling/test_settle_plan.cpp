@@ -208,6 +208,11 @@ TEST(SettlePlan, DeepBedsAreServedWithAWarningNamingTheirDepth) {
   EXPECT_FALSE(settle_choices(s, 0.63, {}, 15.0).record["compaction_damping"].contains("warning"));
   EXPECT_EQ(settle_choices(s, 0.63, {}, 42.3).record["compaction_damping"]["warning"], settle_depth_warning(42.3, settle_compaction_slabs(42.3)))
       << "LIGGGHTS compacts it in slabs";
+  Scene y = s;
+  y.relax.engine = "yade";
+  EXPECT_EQ(settle_choices(y, 0.63, {}, 42.3).record["compaction_damping"]["warning"],
+            settle_depth_warning(42.3, settle_compaction_slabs(42.3), true))
+      << "YADE too, its slabs not measured";
 }
 
 TEST(SettlePlan, ChoicesRecordTheTargetAndWhereEachValueCameFrom) {
