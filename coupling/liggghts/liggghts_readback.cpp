@@ -8,6 +8,7 @@
 #include <map>
 #include <sstream>
 
+#include "btr/model/number_text.h"
 #include "coupling/dem/compaction_lines.h"
 #include "coupling/dem/dem_walls.h"
 #include "coupling/liggghts/liggghts_script.h"
@@ -16,20 +17,6 @@
 namespace btr {
 
 namespace {
-
-std::vector<std::string> split(const std::string& line) {
-  std::istringstream in(line);
-  std::vector<std::string> out;
-  std::string w;
-  while (in >> w) out.push_back(w);
-  return out;
-}
-
-bool to_double(const std::string& s, double& v) {
-  char* end = nullptr;
-  v = std::strtod(s.c_str(), &end);
-  return !s.empty() && end == s.c_str() + s.size();
-}
 
 [[noreturn]] void fail(const std::string& file, const std::string& what, FailureKind kind = FailureKind::BadOutput,
                        const nlohmann::json& values = nlohmann::json::object()) {
@@ -59,20 +46,20 @@ Dump read_dump(const std::string& path) {
       if (!std::getline(in, n)) break;
       expected = std::atol(n.c_str());
     } else if (line.rfind("ITEM: ATOMS", 0) == 0 || line.rfind("ITEM: ENTRIES", 0) == 0) {
-      auto words = split(line);
+      auto words = words_of(line);
       d.columns.assign(words.begin() + 2, words.end());
       while (static_cast<long>(d.rows.size()) < expected && std::getline(in, line)) {
-        auto f = split(line);
+        auto f = words_of(line);
         if (f.size() != d.columns.size())
           fail(path, "row " + std::to_string(d.rows.size() + 1) + ": expected " + std::to_string(d.columns.size()) +
                          " values, got " + std::to_string(f.size()));
         std::vector<double> row(f.size());
         for (std::size_t i = 0; i < f.size(); ++i)
-          if (!to_double(f[i], row[i]) || !std::isfinite(row[i]))
+          if (!read_number(f[i], row[i]) || !std::isfinite(row[i]))
             fail(path,
                  "row " + std::to_string(d.rows.size() + 1) + ", column '" + d.columns[i] +
                      "': expected a finite number, got '" + f[i] + "'",
-                 to_double(f[i], row[i]) ? FailureKind::NonFinite : FailureKind::BadOutput);
+                 read_number(f[i], row[i]) ? FailureKind::NonFinite : FailureKind::BadOutput);
         d.rows.push_back(std::move(row));
       }
       break;
@@ -88,19 +75,19 @@ Dump read_dump(const std::string& path) {
 // energy E J above the bound B J at t = T s", liggghts_script.cpp), LIGGGHTS' "ERROR: Lost atoms: original N
 // current M", or any other ERROR (engine_error).
 void classify_failure_line(const std::string& line, LiggghtsLog& log) {
-  const std::vector<std::string> w = split(line);
+  const std::vector<std::string> w = words_of(line);
   nlohmann::json values = {{"log_line", line}};
   log.failure_kind = FailureKind::EngineError;
   auto number_after = [&](const std::string& a, const std::string& b, const char* key) {
     for (std::size_t i = 0; i + 2 < w.size(); ++i) {
       double x;
-      if (w[i] == a && w[i + 1] == b && to_double(w[i + 2], x))
+      if (w[i] == a && w[i + 1] == b && read_number(w[i + 2], x))
         values[key] = std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr);
     }
   };
   if (line.rfind("BTR-FAILURE kinetic energy ", 0) == 0) {
     double e = 0.0;
-    const bool parsed = w.size() > 3 && to_double(w[3], e);
+    const bool parsed = w.size() > 3 && read_number(w[3], e);
     log.failure_kind = parsed && !std::isfinite(e) ? FailureKind::NonFinite : FailureKind::BlowUp;
     if (parsed) values["kinetic_energy"] = std::isfinite(e) ? nlohmann::json(e) : nlohmann::json(nullptr);
     number_after("the", "bound", "bound");
@@ -109,7 +96,7 @@ void classify_failure_line(const std::string& line, LiggghtsLog& log) {
     log.failure_kind = FailureKind::LostGrains;
     for (std::size_t i = 0; i + 1 < w.size(); ++i) {
       double x;
-      if ((w[i] == "original" || w[i] == "current") && to_double(w[i + 1], x)) values[w[i]] = x;
+      if ((w[i] == "original" || w[i] == "current") && read_number(w[i + 1], x)) values[w[i]] = x;
     }
   }
   log.failure_values = std::move(values);
@@ -127,7 +114,7 @@ LiggghtsLog parse_liggghts_log(const std::string& path) {
   bool in_thermo = false;
   double last_step = -1.0;
   while (std::getline(in, line)) {
-    auto w = split(line);
+    auto w = words_of(line);
     if (w.empty()) { in_thermo = false; continue; }
     // The script's thermo_style is "step time v_btr_ekin f_btr_kmean ..."; LIGGGHTS prints the header
     // with shortened names ("Step Time btr_ekin btr_kmea"), so the columns are taken by position.
@@ -140,15 +127,15 @@ LiggghtsLog parse_liggghts_log(const std::string& path) {
     }
     if (line.rfind("BTR-FINAL ", 0) == 0) {
       for (std::size_t i = 0; i + 1 < w.size(); ++i)
-        if (w[i] == "unbalanced-force") to_double(w[i + 1], log.final_unbalanced_force);
+        if (w[i] == "unbalanced-force") read_number(w[i + 1], log.final_unbalanced_force);
       continue;
     }
     if (read_compaction_line(line, log.compaction)) continue;
     if (line.rfind("BTR-STOP ", 0) == 0) {
       log.stop_reason = w.size() > 1 ? w[1] : "";
       for (std::size_t i = 0; i + 2 < w.size(); ++i)
-        if (w[i] == "t" && w[i + 1] == "=") to_double(w[i + 2], log.stop_time);
-        else if (w[i] == "value" && w[i + 1] == "=") to_double(w[i + 2], log.stop_value);
+        if (w[i] == "t" && w[i + 1] == "=") read_number(w[i + 2], log.stop_time);
+        else if (w[i] == "value" && w[i + 1] == "=") read_number(w[i + 2], log.stop_value);
       continue;
     }
     if ((line.rfind("BTR-FAILURE", 0) == 0 || line.find("ERROR") != std::string::npos) && log.failure.empty()) {
@@ -161,7 +148,7 @@ LiggghtsLog parse_liggghts_log(const std::string& path) {
     std::vector<double> v(w.size());
     bool numeric = true;
     for (std::size_t i = 0; i < w.size() && numeric; ++i) {
-      numeric = to_double(w[i], v[i]);
+      numeric = read_number(w[i], v[i]);
     }
     if (!numeric) {
       // "nan" / "inf" parse as numbers; anything else ends the thermo block
@@ -296,15 +283,15 @@ std::vector<TapSnapshot> read_liggghts_taps(const std::string& dir, const Packin
   while (std::getline(in, line)) {
     const bool is_moved = line.rfind("BTR-TAP-MOVED ", 0) == 0, is_rested = line.rfind("BTR-TAP-RESTED ", 0) == 0;
     if (!is_moved && !is_rested) continue;
-    const auto w = split(line);
+    const auto w = words_of(line);
     double k = 0, t = NAN, e = NAN, step = NAN;
-    if (w.size() < 2 || !to_double(w[1], k) || k < 1 || k > n_taps || k != std::floor(k))
+    if (w.size() < 2 || !read_number(w[1], k) || k < 1 || k > n_taps || k != std::floor(k))
       fail(log_path, "unexpected tap line: " + line);
     for (std::size_t i = 0; i + 2 < w.size(); ++i) {
       if (w[i + 1] != "=") continue;
-      if (w[i] == "t") to_double(w[i + 2], t);
-      else if (w[i] == "kinetic") to_double(w[i + 2], e);
-      else if (w[i] == "step") to_double(w[i + 2], step);
+      if (w[i] == "t") read_number(w[i + 2], t);
+      else if (w[i] == "kinetic") read_number(w[i + 2], e);
+      else if (w[i] == "step") read_number(w[i + 2], step);
     }
     if (!std::isfinite(t) || !std::isfinite(e) || (is_rested && !std::isfinite(step)))
       fail(log_path, "non-finite or missing numbers in: " + line, FailureKind::NonFinite, {{"log_line", line}});
