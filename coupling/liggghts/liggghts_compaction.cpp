@@ -4,25 +4,15 @@
 #include <stdexcept>
 
 #include "btr/model/number_text.h"
-#include "coupling/dem/materials.h"
 #include "coupling/liggghts/liggghts_script.h"
 
 namespace btr {
 
 double liggghts_compaction_drag_rate(const Grains& grains, const Scene& scene, double damping) {
-  const std::vector<double> gamma = liggghts_damping_gamma(grains, scene, damping);
   double sum = 0.0;
   long n = 0;
-  for (std::size_t t = 0; t < scene.grains.components.size(); ++t) {
-    const Component& c = scene.grains.components[t];
-    double r = 0.0;
-    long count = 0;
-    for (const Grain& g : grains)
-      if (g.species == c.species) r += g.r, ++count;
-    if (count == 0) continue;
-    sum += static_cast<double>(count) * gamma[t] / grain_mass(r / static_cast<double>(count), c.density);
-    n += count;
-  }
+  for (const SpeciesDamping& d : liggghts_species_damping(grains, scene, damping))
+    if (d.grains > 0) sum += static_cast<double>(d.grains) * d.gamma / d.mean_mass, n += d.grains;
   if (n == 0) throw std::invalid_argument("compaction drag: no grain of the scene's species");
   return sum / static_cast<double>(n);
 }
@@ -109,9 +99,9 @@ std::string check_run(const CompactionPlan& c) {
 // CompactionPlan::slabs, slab by slab: the slab's grains (btr_slab) take their species' twin type, the grains up
 // to its last join btr_released (the integrator's group), and the check loop runs on its window until the target
 // or rest; then the slab's grains take their species' type again. The grains above (btr_held) never move, so the
-// pairs between two of them are left out of the pair list: their forces act on no integrated grain. Each slab prints "BTR-COMPACTION-SLAB k K
-// reached|rest|max-time t = T s phi = P", and after the last "BTR-COMPACTION-END reached|not-reached ..." (reached:
-// every slab did).
+// pairs between two of them are left out of the pair list: their forces act on no integrated grain. Each slab
+// prints "BTR-COMPACTION-SLAB k K reached|rest|max-time t = T s phi = P", and after the last
+// "BTR-COMPACTION-END reached|not-reached ..." (reached: every slab did).
 std::string slab_loop(const CompactionPlan& c, const Scene& scene, double arming_time) {
   std::ostringstream s;
   const std::string target = g17(c.target), rest = g17(c.rest_kinetic), scale = g6(c.friction_scales.front());

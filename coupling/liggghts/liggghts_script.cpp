@@ -275,18 +275,18 @@ std::string liggghts_rotation_runs(const DrumRotation& rot) {
 
 }  // namespace
 
-std::vector<double> liggghts_damping_gamma(const Grains& grains, const Scene& scene, double damping) {
+std::vector<SpeciesDamping> liggghts_species_damping(const Grains& grains, const Scene& scene, double damping) {
   const bool hooke = scene.relax.model == "hooke";
   const bool stiffness = scene.relax.model == "hooke-stiffness";
   const double v_char = hooke ? hooke_characteristic_velocity(grains) : 0.0;
-  std::vector<double> gamma;
+  std::vector<SpeciesDamping> out;
   for (const Component& c : scene.grains.components) {
     double sum = 0.0;
     long n = 0;
     for (const Grain& g : grains)
       if (g.species == c.species) sum += g.r, ++n;
     if (n == 0) {  // a species with no grain here: any positive value, it damps nothing
-      gamma.push_back(gamma.empty() ? 1.0 : gamma.front());
+      out.push_back({out.empty() ? 1.0 : out.front().gamma, 0.0, 0});
       continue;
     }
     const double r = sum / n, m = grain_mass(r, c.density), r_eff = 0.5 * r;
@@ -300,9 +300,15 @@ std::vector<double> liggghts_damping_gamma(const Grains& grains, const Scene& sc
       const double delta = std::pow(3.0 * m * kGravity / (4.0 * y_eff * std::sqrt(r_eff)), 2.0 / 3.0);
       k = 2.0 * y_eff * std::sqrt(r_eff * delta);
     }
-    gamma.push_back(2.0 * damping / M_PI * std::sqrt(k * m));
+    out.push_back({2.0 * damping / M_PI * std::sqrt(k * m), m, n});
   }
-  if (gamma.front() <= 0.0) throw std::invalid_argument("damping: non-positive viscous coefficient");
+  if (out.front().gamma <= 0.0) throw std::invalid_argument("damping: non-positive viscous coefficient");
+  return out;
+}
+
+std::vector<double> liggghts_damping_gamma(const Grains& grains, const Scene& scene, double damping) {
+  std::vector<double> gamma;
+  for (const SpeciesDamping& d : liggghts_species_damping(grains, scene, damping)) gamma.push_back(d.gamma);
   return gamma;
 }
 

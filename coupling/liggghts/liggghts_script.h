@@ -41,6 +41,14 @@ std::string liggghts_wall_id(const std::string& wall_name);
 // gamma = 2 (damping / pi) sqrt(k m).
 std::vector<double> liggghts_damping_gamma(const Grains& grains, const Scene& scene, double damping);
 
+// The same per species with what it was computed from: the mass of the species' mean grain and its grain count
+// (0 and 0 for a species with no grain here, whose gamma is any positive value).
+struct SpeciesDamping {
+  double gamma = 0.0, mean_mass = 0.0;
+  long grains = 0;
+};
+std::vector<SpeciesDamping> liggghts_species_damping(const Grains& grains, const Scene& scene, double damping);
+
 // The fix property/global lines of the scene's friction (and rolling friction, if the scene has any) per type
 // pair, in this writer's type order, every coefficient times `scale`; re-issued between runs they change the
 // friction.
