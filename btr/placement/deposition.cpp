@@ -576,10 +576,14 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
     Vec3 normals[kMaxContacts];
     for (int i = 0; i < active.n; ++i) normals[i] = active.item[i].normal(x);
     const Descent descent = descend(normals, static_cast<std::size_t>(active.n));
-    Contacts loaded;
+    // Keep the loaded contacts, in order, in place (their keys are distinct already; `overflow` is false here).
+    int kept = 0;
     for (int i = 0; i < active.n; ++i)
-      if (descent.loaded[i]) loaded.add(active.item[i]);
-    active = loaded;
+      if (descent.loaded[i]) {
+        if (kept != i) active.item[kept] = active.item[i];
+        ++kept;
+      }
+    active.n = kept;
     Vec3 d = descent.direction;
     // Gravity balanced by as many independent supports as the dimension: d is round-off.
     if (active.n >= dimension) d = Vec3::Zero();

@@ -29,8 +29,7 @@ bool try_subset(const Vec3* n, const Products& p, std::size_t count, unsigned ma
   const Vec3 g(0.0, 0.0, -1.0);
   int idx[3];
   int k = 0;
-  for (std::size_t i = 0; i < count; ++i)
-    if (mask & (1u << i)) idx[k++] = static_cast<int>(i);
+  for (unsigned m = mask; m != 0; m &= m - 1) idx[k++] = __builtin_ctz(m);  // the set bits, lowest first
   Vec3 d = g;
   double lambda[3] = {0, 0, 0};
   if (k == 1) {  // the usual case, without the matrices (the same operations as below)

@@ -166,27 +166,32 @@ void NeighbourGrid::visit_cell_range(Range rx, Range ry, long iz_lo, long iz_hi,
   constexpr int kBatch = 32;
   Run runs[kBatch];
   if (rx.lo > rx.hi) return;
+  // Row by row (a row's wrap, shift and image code worked out once); a full batch ends the gathering
+  // mid-row, and the next one resumes at (ix, iy).
   long ix = rx.lo, iy = ry.lo;
   while (iy <= ry.hi) {
     int n = 0;
-    while (iy <= ry.hi && n < kBatch) {
-      const long cx = ix, cy = iy;
-      if (++ix > rx.hi) ix = rx.lo, ++iy;
-      long wy = cy, ky = 0;
-      if (wrap_y_) { ky = floor_div(cy, ny_); wy = cy - ky * ny_; }
-      else if (cy < iy0_ || cy >= iy0_ + ny_) continue;
-      long wx = cx, kx = 0;
-      if (wrap_x_) { kx = floor_div(cx, nx_); wx = cx - kx * nx_; }
-      else if (cx < ix0_ || cx >= ix0_ + nx_) continue;
-      const Column& column = columns_[column_of(wx, wy)];
-      const long top = std::min<long>(iz_hi, column.layers() - 1), bottom = std::max(0L, iz_lo);
-      if (top < bottom) continue;
-      const Entry* begin = column.entries.data() + column.start[bottom];
-      const Entry* end = column.entries.data() + column.start[top + 1];
-      if (begin == end) continue;
-      __builtin_prefetch(begin);
-      __builtin_prefetch(reinterpret_cast<const char*>(begin) + 64);
-      runs[n++] = Run{begin, end, kx * period_x_, ky * period_y_, image_code(kx, ky)};
+    for (; iy <= ry.hi && n < kBatch; ++iy, ix = rx.lo) {
+      long wy = iy, ky = 0;
+      if (wrap_y_) { ky = floor_div(iy, ny_); wy = iy - ky * ny_; }
+      else if (iy < iy0_ || iy >= iy0_ + ny_) continue;
+      const long row = nx_ * (wy - iy0_) - ix0_;  // column_of(wx, wy) = row + wx
+      const double sy = ky * period_y_;
+      for (; ix <= rx.hi && n < kBatch; ++ix) {
+        long wx = ix, kx = 0;
+        if (wrap_x_) { kx = floor_div(ix, nx_); wx = ix - kx * nx_; }
+        else if (ix < ix0_ || ix >= ix0_ + nx_) continue;
+        const Column& column = columns_[row + wx];
+        const long top = std::min<long>(iz_hi, column.layers() - 1), bottom = std::max(0L, iz_lo);
+        if (top < bottom) continue;
+        const Entry* begin = column.entries.data() + column.start[bottom];
+        const Entry* end = column.entries.data() + column.start[top + 1];
+        if (begin == end) continue;
+        __builtin_prefetch(begin);
+        __builtin_prefetch(reinterpret_cast<const char*>(begin) + 64);
+        runs[n++] = Run{begin, end, kx * period_x_, sy, image_code(kx, ky)};
+      }
+      if (ix <= rx.hi) break;  // the batch is full mid-row
     }
     for (int k = 0; k < n; ++k) {
       const Run& run = runs[k];
@@ -207,8 +212,10 @@ void NeighbourGrid::visit_column_down(double x, double y, double reach, double z
                                       F&& f) const {
   // The columns are looked up once (a fall usually reads two or three layers of each); then layer by
   // layer, in the order visit_cell_range would take them, with the first lines of each run prefetched.
-  struct Col {
-    const Column* column;
+  struct Col {  // a column's layer table, entries and layer count, read once
+    const std::uint32_t* start;
+    const Entry* entries;
+    long layers;
     double sx, sy;
     int image;
   };
@@ -246,22 +253,21 @@ void NeighbourGrid::visit_column_down(double x, double y, double reach, double z
       const Column& column = columns_[column_of(wx, wy)];
       if (column.layers() == 0) continue;
       top = std::max<long>(top, column.layers() - 1);
-      cols[n++] = Col{&column, kx * period_x_, ky * period_y_, image_code(kx, ky)};
+      cols[n++] = Col{column.start.data(), column.entries.data(), column.layers(), kx * period_x_, ky * period_y_,
+                      image_code(kx, ky)};
     }
   }
   top = std::min<long>(top, static_cast<long>(std::floor(z_start / h_)));
   for (long iz = top; iz >= 0; --iz) {
     if (!keep_going((iz + 1) * h_)) return;
+    for (int k = 0; k < n; ++k)
+      if (iz < cols[k].layers) __builtin_prefetch(cols[k].entries + cols[k].start[iz]);
     for (int k = 0; k < n; ++k) {
-      const Column& column = *cols[k].column;
-      if (iz < column.layers()) __builtin_prefetch(column.entries.data() + column.start[iz]);
-    }
-    for (int k = 0; k < n; ++k) {
-      const Column& column = *cols[k].column;
-      if (iz >= column.layers()) continue;
-      const Entry* e = column.entries.data() + column.start[iz];
-      const Entry* end = column.entries.data() + column.start[iz + 1];
-      for (; e != end; ++e) f(e->index, Vec3(e->x + cols[k].sx, e->y + cols[k].sy, e->z), e->r, cols[k].image);
+      const Col& col = cols[k];
+      if (iz >= col.layers) continue;
+      const Entry* e = col.entries + col.start[iz];
+      const Entry* end = col.entries + col.start[iz + 1];
+      for (; e != end; ++e) f(e->index, Vec3(e->x + col.sx, e->y + col.sy, e->z), e->r, col.image);
     }
   }
 }
