@@ -173,7 +173,9 @@ TargetMargin settle_target_margin(const Grains& btr_grains, const Scene& scene, 
 
 SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohmann::json& target_from,
                              double depth, const TargetMargin& margin) {
+  const bool yade = scene.relax.engine == "yade";
   SettleChoices c;
+  c.damping = yade ? kSettleDamping : kLiggghtsSettleDamping;
   c.settings.target_phi = target_phi;
   c.settings.damping = c.damping;
   c.settings.target_margin = margin.value;
@@ -183,7 +185,6 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
       coarser_step_3d(c.scene, kSettleTimestepFraction3d,
                       "btr settle: the settled beds' packing fraction and coordination are those at 0.2 (to 1e-4 and "
                       "0.02, 8 beds in LIGGGHTS, 1 in YADE) for 0.66-0.94x the relaxation's time (docs/guide/settle.md)");
-  const bool yade = scene.relax.engine == "yade";
   const double compaction_damping = yade ? kYadeCompactionDamping : kCompactionDamping;
   c.settings.compaction_damping = compaction_damping;
   const bool measured_depth = depth >= 0.75 * kDampingAnchorDepth && depth <= kDeepBedDepth;
@@ -206,8 +207,12 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
       {"friction_scales", {{"value", scene.relax.friction_scales}, {"from", "the scene's relax.friction_scales"}}},
       {"damping",
        {{"value", c.damping},
-        {"from", "btr settle: quasi-static settle after the compaction, under YADE's local damping in both engines "
-                 "(LIGGGHTS: the same law by fix addforce, so that no grain is left hanging in a pore)"}}},
+        {"from", std::string("btr settle: quasi-static settle after the compaction, under YADE's local damping in both "
+                             "engines (LIGGGHTS: the same law by fix addforce, so that no grain is left hanging in a "
+                             "pore); ") +
+                     (yade ? "0.5 in YADE"
+                           : "0.7 in LIGGGHTS: 0.77x the time of 0.5 on bed3d, the same packing fraction, Z 0.02 "
+                             "lower on average (coupling/README.md)")}}},
       {"stop_rule", stop_rule_record(scene, c.stop_rule)},
   };
   c.settings.compaction_slabs = settle_compaction_slabs(depth);

@@ -68,12 +68,13 @@ struct CalibrationPlan {
 // explicit relax.timestep is kept).
 CalibrationPlan calibration_plan(const Scene& scene, std::int64_t grains = 0);
 
-// LIGGGHTS' compaction damping: the value that lands bed3d's settled coordination on its pours' at 10 000 grains,
-// 3 cm = 14.1 largest diameters deep, with the settle under YADE's local damping (coupling/README.md, "Re-measured
-// with the local-damping settle"). At 42.3 largest diameters (30 000 grains) the settled coordination does not
-// follow the damping (0.045 and 0.06 give 5.662 and 5.673 against the pours' 5.520): the collapse, which runs from
-// the floor up, sets it there, so there is no depth rule; settle.json records the bed's depth and says when it
-// lies away from the one measured.
+// LIGGGHTS' compaction damping: a value that lands bed3d's settled coordination on its pours' at 10 000 grains,
+// 3 cm = 14.1 largest diameters deep. Re-measured under the compaction's one-rate drag and the settle's damping 0.7
+// (coupling/README.md, "Re-measured under the one-rate drag"): 0.065 and 0.075 both land there (mean Z 5.479 and
+// 5.518 on BTR seeds 1-3 against the pours' 5.498 +- 0.020); 0.075 is kept because the matrix's shallower beds
+// (9-13 largest diameters) sit under their pours' coordination at 0.065. At 42.3 largest diameters (30 000 grains),
+// compacted at once, the settled coordination did not follow the damping: the collapse, which runs from the floor
+// up, set it, hence the slabs below; settle.json records the bed's depth and says when it lies away from 14.1.
 inline constexpr double kDampingAnchorDepth = 14.1;  // largest diameters: bed3d, 10 000 grains in 3 cm x 3 cm
 inline constexpr double kCompactionDamping = 0.075;
 // Beds deeper than this (largest diameters), compacted at once, overshoot their target: the frictionless collapse
@@ -103,6 +104,13 @@ inline constexpr double kSettleCompactionTimestepFraction = 0.4;
 // rolling friction, size ratio 1-4, a cylinder), bed3d and a YADE bed (docs/guide/settle.md, "The settle's time
 // step"): the same bulk packing fraction to 1e-4 and coordination to 0.02, for 0.66-0.94x the relaxation's time.
 inline constexpr double kSettleTimestepFraction3d = 0.4;
+// The quasi-static settle's local damping after a bed's compaction. LIGGGHTS: 0.7, measured on bed3d at 10 000
+// grains (BTR seeds 1-3, compaction damping 0.065 and 0.075): the same packing fraction to 1e-4, Z 0.009-0.039
+// lower (the pours' floor is 0.020), for 0.77x the relaxation's processor time; 0.8 is no faster (coupling/README.md,
+// "Re-measured under the one-rate drag"). YADE keeps 0.5, where it was measured; heaps keep 0.5, which holds
+// their shape.
+inline constexpr double kLiggghtsSettleDamping = 0.7;
+inline constexpr double kSettleDamping = 0.5;
 
 // The bed's depth in largest diameters: its grains' solid volume over the container's floor area (2D: width),
 // at the packing fraction the calibration measured.
@@ -110,7 +118,8 @@ double bed_depth_in_largest_diameters(const Grains& grains, const Scene& scene, 
 
 // What settle hands the relaxation: the target, the friction-reduction compaction with the damping of the rule
 // above for the bed's depth (LIGGGHTS; YADE: 0.5) and a step of 0.4 of the characteristic time, then the
-// quasi-static settle (damping 0.5) on the unbalanced-force rule, in 3D at the same step. `record` (settle.json "chosen") says where each
+// quasi-static settle (damping kLiggghtsSettleDamping; YADE kSettleDamping) on the unbalanced-force rule, in 3D at
+// the same step. `record` (settle.json "chosen") says where each
 // value came from.
 // The window the compaction watches: btr measure's own bulk window (this many largest diameters from the floor,
 // walls and surface), where the settled bed is measured and judged, when the BTR bed keeps one through the
@@ -132,7 +141,7 @@ struct SettleChoices {
   Scene scene;  // the scene the relaxation runs: the scene's own, its relax.timestep_fraction as chosen
   RelaxSettings settings;
   std::string stop_rule = "unbalanced-force";
-  double damping = 0.5;
+  double damping = kSettleDamping;
   nlohmann::json record;
 };
 SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohmann::json& target_from,

@@ -220,7 +220,7 @@ TEST(SettlePlan, ChoicesRecordTheTargetAndWhereEachValueCameFrom) {
   const SettleChoices c = settle_choices(s, 0.63, {{"source", "calibration pour"}}, 15.0);
   EXPECT_EQ(c.settings.target_phi, 0.63);
   EXPECT_EQ(c.settings.compaction_timestep_fraction, 0.4);
-  EXPECT_EQ(c.settings.damping, 0.5);
+  EXPECT_EQ(c.settings.damping, 0.7);
   EXPECT_EQ(c.settings.target_margin, kCalibrationMargin);
   EXPECT_EQ(c.stop_rule, "unbalanced-force");
   for (const char* key : {"target_phi", "compaction_damping", "damping", "stop_rule", "target_margin",
@@ -231,6 +231,7 @@ TEST(SettlePlan, ChoicesRecordTheTargetAndWhereEachValueCameFrom) {
   EXPECT_EQ(c.record["target_phi"]["from"]["source"], "calibration pour");
   s.relax.engine = "yade";
   EXPECT_EQ(settle_choices(s, 0.63, {}, 15.0).settings.compaction_damping, 0.5);
+  EXPECT_EQ(settle_choices(s, 0.63, {}, 15.0).settings.damping, 0.5) << "YADE's settle keeps the damping it was measured at";
 }
 
 TEST(SettlePlan, Bed3dSettlesAtTheCompactionsStepUnlessTheSceneAsksForMore) {
