@@ -116,7 +116,9 @@ class NeighbourGrid {
   struct Range { long lo, hi; };
   Range x_range(double lo, double hi) const;
   Range y_range(double lo, double hi) const;
-  long column_of(long ix, long iy) const { return (ix - ix0_) + nx_ * (iy - iy0_); }
+  // column_of(ix, iy) = row_start(iy) + ix: a row's part worked out once where a loop walks along the row.
+  long row_start(long iy) const { return nx_ * (iy - iy0_) - ix0_; }
+  long column_of(long ix, long iy) const { return row_start(iy) + ix; }
   void grow_to(long ix, long iy);
   static long floor_div(long a, long b) {
     if (a >= 0 && a < b) return 0;  // inside the period: no division (the usual case)
@@ -175,7 +177,7 @@ void NeighbourGrid::visit_cell_range(Range rx, Range ry, long iz_lo, long iz_hi,
       long wy = iy, ky = 0;
       if (wrap_y_) { ky = floor_div(iy, ny_); wy = iy - ky * ny_; }
       else if (iy < iy0_ || iy >= iy0_ + ny_) continue;
-      const long row = nx_ * (wy - iy0_) - ix0_;  // column_of(wx, wy) = row + wx
+      const long row = row_start(wy);
       const double sy = ky * period_y_;
       for (; ix <= rx.hi && n < kBatch; ++ix) {
         long wx = ix, kx = 0;

@@ -210,9 +210,9 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
         {"from", std::string("btr settle: quasi-static settle after the compaction, under YADE's local damping in both "
                              "engines (LIGGGHTS: the same law by fix addforce, so that no grain is left hanging in a "
                              "pore); ") +
-                     (yade ? "0.5 in YADE"
-                           : "0.7 in LIGGGHTS: 0.77x the time of 0.5 on bed3d, the same packing fraction, Z 0.02 "
-                             "lower on average (coupling/README.md)")}}},
+                     (yade ? "YADE keeps the value it was measured at"
+                           : "LIGGGHTS: 0.77x the time of 0.5 on bed3d, the same packing fraction, Z 0.02 lower on "
+                             "average (coupling/README.md)")}}},
       {"stop_rule", stop_rule_record(scene, c.stop_rule)},
   };
   c.settings.compaction_slabs = settle_compaction_slabs(depth);
