@@ -116,6 +116,10 @@ CalibrationPlan calibration_plan(const Scene& scene, std::int64_t grains) {
       coarser_step_3d(cell, kCalibrationTimestepFraction3d,
                       "btr settle: the pours' packing fraction is the same at this fraction as at 0.2, for 0.58x the "
                       "processor time (docs/guide/settle.md)");
+  cell.relax.stop_kinetic_ratio = kCalibrationStopRatio;
+  plan.record["stop_kinetic_ratio"] = {
+      {"value", kCalibrationStopRatio},
+      {"from", "btr settle: the cell's bulk packing fraction is final by then (docs/guide/settle.md)"}};
   if (grains > 0) {
     if (grains < kMinCalibrationGrains)
       throw RelaxRefused("--calibration-grains: expected at least " + std::to_string(kMinCalibrationGrains) +

@@ -147,6 +147,16 @@ TEST(SettlePlan, Calibration3dStepsAtTheMeasuredFractionUnlessTheSceneAsksForMor
   EXPECT_EQ(calibration_plan(flat).scene.relax.timestep_fraction, flat.relax.timestep_fraction);
 }
 
+TEST(SettlePlan, CalibrationPourStopsAtItsOwnKineticRatioNotTheScenes) {
+  Scene s = bed(3);
+  s.relax.stop_kinetic_ratio = 1e-6;
+  const CalibrationPlan p = calibration_plan(s);
+  ASSERT_NE(kCalibrationStopRatio, s.relax.stop_kinetic_ratio);
+  EXPECT_EQ(pour_scene(p.scene, PourSettings{}).relax.stop_kinetic_ratio, kCalibrationStopRatio);
+  EXPECT_EQ(p.record["stop_kinetic_ratio"]["value"].get<double>(), kCalibrationStopRatio);
+  EXPECT_EQ(s.relax.stop_kinetic_ratio, 1e-6);  // the scene's own relaxation keeps the user's ratio
+}
+
 TEST(SettlePlan, CalibrationOfA2dMixtureCountsEachComponentsArea) {
   Scene s = bed(2);
   Component big = s.grains.components[0];
