@@ -12,7 +12,8 @@ void CircleArc::bounds(Vec3& lo, Vec3& hi) const {
   const Vec3 p0 = C + rho * u, p1 = C + rho * (ce * u + se * v);
   lo = p0.cwiseMin(p1);
   hi = p0.cwiseMax(p1);
-  // Is the direction (c, s) at an angle in (0, t_end) (t_end in [0, 2 pi])?
+  // Is the direction of (c, s) at an angle in (0, t_end) (t_end in [0, 2 pi])? Only signs are read, so
+  // (c, s) need not be a unit vector: (u_k, v_k) itself, without the divisions by its length.
   auto inside = [&](double c, double s) {
     const double after_end = c * se - s * ce;  // > 0: (c, s) is before the end direction (within pi of it)
     if (t_end <= M_PI) return s > 0.0 && after_end > 0.0;
@@ -21,9 +22,8 @@ void CircleArc::bounds(Vec3& lo, Vec3& hi) const {
   for (int k = 0; k < 3; ++k) {
     const double m = std::sqrt(u[k] * u[k] + v[k] * v[k]);
     if (m <= 0.0) continue;
-    const double c = u[k] / m, s = v[k] / m;
-    if (inside(c, s)) hi[k] = std::max(hi[k], C[k] + rho * m);
-    if (inside(-c, -s)) lo[k] = std::min(lo[k], C[k] - rho * m);
+    if (inside(u[k], v[k])) hi[k] = std::max(hi[k], C[k] + rho * m);
+    if (inside(-u[k], -v[k])) lo[k] = std::min(lo[k], C[k] - rho * m);
   }
 }
 
