@@ -41,13 +41,18 @@ double wrap_after(double t, double t_min) {
 
 }  // namespace
 
-double first_rising_root(double a, double b, double c, double t_min, double t_max, double screen) {
+double first_rising_root(double a, double b, double c, double t_min, double t_max, double screen,
+                         double* direction) {
   const double A2 = a * a + b * b;
   if (A2 <= 0.0 || c * c > A2) return -1.0;
   const double q = std::sqrt(A2 - c * c);
   const double y = b * c - a * q, x = a * c + b * q;
-  // Beyond t_max whatever t_min is (a root wrapped past t_min lies beyond 2 pi).
-  if (screen < 5.0 && pseudo_angle(x, y) > screen) return -1.0;
+  if (screen < 5.0 || direction) {
+    const double p = pseudo_angle(x, y);
+    // Beyond t_max whatever t_min is (a root wrapped past t_min lies beyond 2 pi).
+    if (p > screen) return -1.0;
+    if (direction) *direction = p;
+  }
   const double t = wrap_after(std::atan2(y, x), t_min);
   return t <= t_max ? t : -1.0;
 }

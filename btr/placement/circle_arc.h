@@ -26,7 +26,9 @@ struct CircleArc {
 // Smallest t in (t_min, t_max] with a cos t + b sin t = c where the left side is increasing
 // (crossing c from below). Returns a negative value when there is none. screen (optional) is
 // root_screen(t_max): a root whose direction lies beyond it is rejected before its angle is computed.
-double first_rising_root(double a, double b, double c, double t_min, double t_max, double screen = 5.0);
+// direction (optional) receives the pseudo-angle of the root's direction when a root is returned.
+double first_rising_root(double a, double b, double c, double t_min, double t_max, double screen = 5.0,
+                         double* direction = nullptr);
 
 // A monotone stand-in for the angle of the direction (x, y) over [0, 2 pi), in [0, 4): comparing two of
 // them orders the angles without inverse trigonometry.
@@ -56,12 +58,18 @@ inline void screen_cos_sin(double t, double& c, double& s) {
 // round-off and below nothing the roots' own tolerance needs); no screen (5) when t_max is near 2 pi.
 // A screen only rejects roots beyond t_max early: every root it lets through is still compared with
 // t_max exactly, so its own accuracy (screen_cos_sin) changes no result.
+constexpr double kScreenMargin = 1e-9;
+inline bool has_root_screen(double t_max) { return t_max < kTwoPi - 1e-6; }
 inline double root_screen(double t_max) {
-  if (!(t_max < kTwoPi - 1e-6)) return 5.0;
+  if (!has_root_screen(t_max)) return 5.0;
   double c, s;
   screen_cos_sin(t_max, c, s);
-  return pseudo_angle(c, s) + 1e-9;
+  return pseudo_angle(c, s) + kScreenMargin;
 }
+// root_screen(t_max) without a cosine or sine, from p, the pseudo-angle of a direction at most 1e-12 rad before
+// t_max's (a root's own, for the roots up to it plus a tie): over that angle the pseudo-angle grows by at most
+// as much (its slope is at most 1), far within the margin.
+inline double root_screen_after(double t_max, double p) { return has_root_screen(t_max) ? p + kScreenMargin : 5.0; }
 
 // All t in (t_min, t_max] with a cos t + b sin t = c, ascending; returns how many (0, 1 or 2).
 // screen as for first_rising_root.

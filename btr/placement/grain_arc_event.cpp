@@ -36,8 +36,13 @@ void offer_grains_on_arc(const NeighbourGrid& grid, double r, double r_max, cons
       return;
     }
     if (screen_t != ev.t) screen_t = ev.t, screen = root_screen(ev.t + kTieT);
-    const double t = first_rising_root(-a, -b, K - R2, touching ? kSkipTangency : 0.0, ev.t + kTieT, screen);
-    if (t >= 0.0) ev.offer(t, o, kTieT);
+    double direction;
+    const double t = first_rising_root(-a, -b, K - R2, touching ? kSkipTangency : 0.0, ev.t + kTieT, screen,
+                                       &direction);
+    if (t < 0.0) return;
+    ev.offer(t, o, kTieT);
+    // A new event at t: its screen from the root's own direction.
+    if (ev.t == t && screen_t != t) screen_t = t, screen = root_screen_after(t + kTieT, direction);
   };
   // In two parts: first the grains near the arc's first stretch (1.5 radii of travel), where a rolling grain
   // usually meets the next one; only if no event is found there, those near the rest of the arc up to the
