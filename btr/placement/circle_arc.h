@@ -15,6 +15,9 @@ struct CircleArc {
   double rho = 0.0;
   Vec3 u = Vec3::UnitX(), v = Vec3::UnitY();  // orthonormal; P(0) = C + rho u, P'(0) along v
   double t_end = 0.0;
+  // The pseudo-angle (pseudo_angle, below) of the direction t_end was taken from (its atan2's arguments), when the
+  // caller knows it: the root screens at the arc's end then need no cosine or sine. Negative: not known.
+  double end_direction = -1.0;
 
   Vec3 at(double t) const { return C + rho * (std::cos(t) * u + std::sin(t) * v); }
   Vec3 tangent(double t) const { return -std::sin(t) * u + std::cos(t) * v; }
@@ -70,6 +73,11 @@ inline double root_screen(double t_max) {
 // t_max's (a root's own, for the roots up to it plus a tie): over that angle the pseudo-angle grows by at most
 // as much (its slope is at most 1), far within the margin.
 inline double root_screen_after(double t_max, double p) { return has_root_screen(t_max) ? p + kScreenMargin : 5.0; }
+// root_screen(t + extra) (extra at most 1e-12) for a parameter t of the arc: from its end direction when t is its end.
+inline double arc_root_screen(const CircleArc& arc, double t, double extra) {
+  if (t == arc.t_end && arc.end_direction >= 0.0) return root_screen_after(t + extra, arc.end_direction);
+  return root_screen(t + extra);
+}
 
 // All t in (t_min, t_max] with a cos t + b sin t = c, ascending; returns how many (0, 1 or 2).
 // screen as for first_rising_root.

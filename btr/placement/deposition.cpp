@@ -635,6 +635,7 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
           break;
         }
         arc.t_end = t_low;
+        arc.end_direction = pseudo_angle(-arc.u.z(), -arc.v.z());
         const Vec3 before = x;
         roll_on_arc(x, r, active, arc, walls);
         // Wedged a hair (~1e-8 rad) beside the lowest line against a grain that the descent, at round-off,
@@ -661,7 +662,9 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
       arc.rho = p.R;
       arc.u = (x - p.c).normalized();
       arc.v = (d - d.dot(arc.u) * arc.u).normalized();
-      arc.t_end = std::max(0.0, std::atan2(arc.u.z(), -arc.v.z()));  // the support's equator
+      const double equator = std::atan2(arc.u.z(), -arc.v.z());  // the support's equator
+      arc.t_end = std::max(0.0, equator);
+      if (equator > 0.0) arc.end_direction = pseudo_angle(-arc.v.z(), arc.u.z());
     } else if (drums == 0 && ((spheres == 2 && planes == 0 && cylinders == 0) ||
                               (spheres == 1 && planes == 1 && cylinders == 0))) {
       int qi = pi;  // the second support: the plane, or the second sphere
@@ -686,6 +689,7 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
       double t_low = std::atan2(-arc.v.z(), -arc.u.z());
       if (t_low <= 0.0) t_low += kTwoPi;
       arc.t_end = t_low;  // the lowest point of the circle
+      arc.end_direction = pseudo_angle(-arc.u.z(), -arc.v.z());
     } else if (spheres == 1 && cylinders == 1 && planes == 0 && drums == 0) {
       if (roll_along_cylinder(x, r, active, si, ci, d, walls)) stable = true;
       continue;

@@ -35,7 +35,7 @@ void offer_grains_on_arc(const NeighbourGrid& grid, double r, double r_max, cons
       ev.offer(0.0, o, kTieT);
       return;
     }
-    if (screen_t != ev.t) screen_t = ev.t, screen = root_screen(ev.t + kTieT);
+    if (screen_t != ev.t) screen_t = ev.t, screen = arc_root_screen(arc, ev.t, kTieT);
     double direction;
     const double t = first_rising_root(-a, -b, K - R2, touching ? kSkipTangency : 0.0, ev.t + kTieT, screen,
                                        &direction);
@@ -85,7 +85,7 @@ void offer_lift_offs(const Contacts& supports, const CircleArc& arc, Event& ev) 
   // double), the same value at several times the cost.
   auto vertical_cross = [](const Vec3& p, const Vec3& q) { return p.x() * q.y() - p.y() * q.x(); };
   const Vec3 z = Vec3::UnitZ();
-  double lift_screen_t = ev.t, lift_screen = root_screen(ev.t);  // recomputed only when a lift-off moves ev.t
+  double lift_screen_t = ev.t, lift_screen = arc_root_screen(arc, ev.t, 0.0);  // recomputed when a lift-off moves ev.t
   for (int k = 0; k < 2; ++k) {
     const Obstacle& other = supports.item[1 - k];
     double a, b, c;
@@ -99,7 +99,7 @@ void offer_lift_offs(const Contacts& supports, const CircleArc& arc, Event& ev) 
       b = -vertical_cross(arc.u, other.c);
       c = 0.0;
     }
-    if (lift_screen_t != ev.t) lift_screen_t = ev.t, lift_screen = root_screen(ev.t);
+    if (lift_screen_t != ev.t) lift_screen_t = ev.t, lift_screen = arc_root_screen(arc, ev.t, 0.0);
     double roots[2];
     const int n = trig_roots(a, b, c, kTieT, ev.t, roots, lift_screen);
     for (int m = 0; m < n; ++m) {
