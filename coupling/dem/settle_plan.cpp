@@ -179,9 +179,8 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
                              double depth, const TargetMargin& margin) {
   const bool yade = scene.relax.engine == "yade";
   SettleChoices c;
-  c.damping = yade ? kSettleDamping : kLiggghtsSettleDamping;
   c.settings.target_phi = target_phi;
-  c.settings.damping = c.damping;
+  c.settings.damping = yade ? kSettleDamping : kLiggghtsSettleDamping;
   c.settings.target_margin = margin.value;
   c.settings.compaction_timestep_fraction = kSettleCompactionTimestepFraction;
   c.scene = scene;
@@ -210,7 +209,7 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
       {"target_margin", margin.record},
       {"friction_scales", {{"value", scene.relax.friction_scales}, {"from", "the scene's relax.friction_scales"}}},
       {"damping",
-       {{"value", c.damping},
+       {{"value", *c.settings.damping},
         {"from", std::string("btr settle: quasi-static settle after the compaction, under YADE's local damping in both "
                              "engines (LIGGGHTS: the same law by fix addforce, so that no grain is left hanging in a "
                              "pore); ") +
@@ -264,10 +263,11 @@ HeapCalibrationPlan heap_calibration_plan(const Scene& scene, const Grains& btr_
 SettleChoices heap_settle_choices(const Scene& scene, double angle_deg, const nlohmann::json& angle_from) {
   SettleChoices c;
   c.scene = scene;
-  c.settings.damping = c.damping;
+  c.settings.damping = kSettleDamping;
   c.record = {
       {"angle_deg", {{"value", angle_deg}, {"from", angle_from}}},
-      {"damping", {{"value", c.damping}, {"from", "btr settle: a quasi-static settle that holds the heap's shape"}}},
+      {"damping",
+       {{"value", *c.settings.damping}, {"from", "btr settle: a quasi-static settle that holds the heap's shape"}}},
       {"stop_rule", stop_rule_record(scene, c.stop_rule)},
   };
   return c;

@@ -148,7 +148,6 @@ struct SettleChoices {
   Scene scene;  // the scene the relaxation runs: the scene's own, its relax.timestep_fraction as chosen
   RelaxSettings settings;
   std::string stop_rule = "unbalanced-force";
-  double damping = kSettleDamping;
   nlohmann::json record;
 };
 SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohmann::json& target_from,
