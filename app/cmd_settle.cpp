@@ -100,6 +100,7 @@ int run(const Options& o, const CLI::App& cmd) {
   // ---- 2. (beds) the calibration pour: the target packing fraction; (heaps) the calibration and the BTR heap
   double target = 0.0;
   json target_from;
+  CalibratedTarget calibrated;
   btr::Packing to_relax;
   HeapSteps heap_steps;
   if (heap) {
@@ -109,7 +110,7 @@ int run(const Options& o, const CLI::App& cmd) {
   } else {
     say("2/3 calibration pour of " + std::to_string(cal.grains) + " grains in a periodic cell " +
         std::to_string(cal.width * 1e3) + " mm wide (" + engine + ")");
-    const CalibratedTarget calibrated =
+    calibrated =
         calibrated_target(cal, scene.dimension, engine, run_options, out.string(), o.target_error);
     for (const json& step : calibrated.steps) steps.push_back(step);
     target = calibrated.phi;
@@ -157,6 +158,14 @@ int run(const Options& o, const CLI::App& cmd) {
 
   // ---- the settled packing, and the engine's ready-to-run inputs of it
   btr::Packing settled = r.relaxed;
+  if (!heap && settled.meta.contains("target_phi")) {
+    json& t = settled.meta["target_phi"];
+    const json looser = looser_than_btr(t.value("initial_bulk_packing_fraction", 0.0), calibrated);
+    if (!looser.is_null()) {
+      t["reached"] = false;
+      t["looser_than_btr"] = looser;
+    }
+  }
   settled.meta["command"] = "settle";
   json record = {{"program", "btr"},     {"version", BTR_VERSION}, {"command", "settle"},
                  {"scene_file", scene.file}, {"scene_name", scene.name}, {"engine", engine},
@@ -194,6 +203,13 @@ int run(const Options& o, const CLI::App& cmd) {
       std::to_string(record["wall_seconds"].get<double>()) + " s");
   say("wrote " + o.out + "/" + scene.name + ".csv (.json, .vtp), settle.json, dem_input/, and each step's folder "
       "(btr/, calibration/, " + std::string(heap ? "btr_heap/, " : "") + "relax/)");
+  if (reached.is_object() && reached.contains("looser_than_btr")) {
+    std::cerr << "btr settle: the BTR bed (bulk phi " << btr::g6(reached["initial_bulk_packing_fraction"].get<double>())
+              << ") is denser than the target " << btr::g6(target) << " +- " << btr::g6(calibrated.standard_error)
+              << ": this material pours looser than BTR places grains, and settle cannot loosen a bed. The settled "
+                 "packing is written (settle.json, target_phi.looser_than_btr)\n";
+    return kTargetNotReached;
+  }
   if (reached.is_object() && reached.value("reached", true) == false) {
     std::cerr << "btr settle: the relaxation did not reach the target packing fraction " << target
               << " (settle.json, target_phi); the settled packing is written\n";

@@ -291,6 +291,41 @@ TEST_F(SettleCli, TargetErrorPoursTheCellAgainUntilTheTargetIsThatPrecise) {
   }
 }
 
+// The tiny bed's disks made very rough (friction 1, rolling friction 0.3, restitution 0.1): their pour stands near
+// 0.78 where BTR places them at 0.83. Settle compacts and cannot loosen: it says so (exit 6, the record) and still
+// writes the settled packing, instead of handing back BTR's bed as if it were the pour's.
+TEST_F(SettleCli, AMaterialThatPoursLooserThanBtrIsReportedNotPassedOff) {
+  if (!btr_test::have_engine("liggghts")) {
+    ADD_FAILURE() << "liggghts is not installed";
+    return;
+  }
+  const std::string body = replaced(replaced(kTinyBed, "restitution = 0.3", "restitution = 0.1"), "friction = 0.5\n",
+                                    "friction = 1.0\nrolling_friction = 0.3\n");
+  const std::string scene_path = scene_file("rough_bed", body);
+  const fs::path out = dir_ / "rough";
+  const CliRun r = btr("settle " + scene_path + " -o " + out.string() + " --engine liggghts --quiet");
+  ASSERT_EQ(r.code, 6) << r.out << r.err;
+  EXPECT_NE(r.err.find("looser"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(out / "rough_bed.csv"));
+
+  // measured here: the calibration pour's packing fraction and the BTR bed's, each in its own window
+  const nlohmann::json rec = nlohmann::json::parse(slurp(out / "settle.json"));
+  const nlohmann::json& looser = rec["target_phi"]["looser_than_btr"];
+  ASSERT_TRUE(looser.is_object()) << rec["target_phi"].dump();
+  EXPECT_FALSE(rec["target_phi"]["reached"].get<bool>());
+  const Packing cal = read_packing((out / "calibration" / "poured.csv").string());
+  const double phi_cal = bulk_packing_fraction(cal.grains, scene_from_json(cal.meta["scene"], "poured.json"), 2.0);
+  const Packing deposit = read_packing((out / "btr" / "rough_bed.csv").string());
+  const double margin = rec["chosen"]["target_margin"]["value"].get<double>();
+  const double phi_btr =
+      bulk_packing_fraction(deposit.grains, scene_from_json(deposit.meta["scene"], "rough_bed.json"), margin);
+  const double se = looser["standard_error"].get<double>();
+  EXPECT_DOUBLE_EQ(looser["target"].get<double>(), phi_cal);
+  EXPECT_DOUBLE_EQ(looser["btr_bulk_packing_fraction"].get<double>(), phi_btr);
+  EXPECT_GT(phi_btr, phi_cal + 2.0 * se);
+  EXPECT_FALSE(rec["target_phi"]["compaction_ran"].get<bool>());
+}
+
 // 400 spheres of radius 0.45-0.5 mm rained into a periodic cell 6 mm square: a bed about 10 diameters deep.
 TEST_F(SettleCli, Bed3dSettlesAtTheCompactionsStepAndHandsTheUserTheScenesOwn) {
   if (!btr_test::have_engine("liggghts")) {
