@@ -4,6 +4,7 @@
 // relaxation of the BTR packing to that target. A heap: the calibration is the scene poured with softened grains,
 // whose flank angle BTR then builds (settle_heap.h); coupling/dem/settle_plan.h says what is chosen and why.
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -15,6 +16,7 @@
 #include "commands.h"
 #include "coupling/dem/process.h"
 #include "coupling/dem/settle_plan.h"
+#include "coupling/dem/settle_verdict.h"
 #include "coupling/engines.h"
 #include "coupling/io/atomic_file.h"
 #include "engine_command.h"
@@ -158,13 +160,20 @@ int run(const Options& o, const CLI::App& cmd) {
 
   // ---- the settled packing, and the engine's ready-to-run inputs of it
   btr::Packing settled = r.relaxed;
+  bool off_target = false;
   if (!heap && settled.meta.contains("target_phi")) {
     json& t = settled.meta["target_phi"];
-    const json looser = looser_than_btr(t.value("initial_bulk_packing_fraction", 0.0), calibrated);
-    if (!looser.is_null()) {
+    const json& settled_phi = t["settled_bulk_packing_fraction"];
+    const btr::TargetVerdict v = btr::settle_target_verdict(
+        t.value("initial_bulk_packing_fraction", 0.0),
+        settled_phi.is_number() ? settled_phi.get<double>() : std::nan(""), t.value("compaction_ran", false),
+        t.value("reached", true), target, calibrated.standard_error, calibrated.from.value("bulk_coordination", json()));
+    off_target = v.off_target;
+    if (!v.looser_than_btr.is_null()) {
       t["reached"] = false;
-      t["looser_than_btr"] = looser;
+      t["looser_than_btr"] = v.looser_than_btr;
     }
+    if (!v.short_of_target.is_null()) t["short_of_target"] = v.short_of_target;
   }
   settled.meta["command"] = "settle";
   json record = {{"program", "btr"},     {"version", BTR_VERSION}, {"command", "settle"},
@@ -210,11 +219,14 @@ int run(const Options& o, const CLI::App& cmd) {
                  "packing is written (settle.json, target_phi.looser_than_btr)\n";
     return kTargetNotReached;
   }
-  if (reached.is_object() && reached.value("reached", true) == false) {
-    std::cerr << "btr settle: the relaxation did not reach the target packing fraction " << target
-              << " (settle.json, target_phi); the settled packing is written\n";
-    return kTargetNotReached;
+  if (reached.is_object() && reached.contains("short_of_target")) {
+    const bool within = reached["short_of_target"]["within_precision"].get<bool>();
+    std::cerr << "btr settle: the compaction came to rest below the target packing fraction " << btr::g6(target)
+              << "; the settled bed is " << (within ? "within " : "further than ") << btr::g6(btr::kTargetPrecisionErrors)
+              << " of the target's standard errors (" << btr::g6(calibrated.standard_error) << ") from it"
+              << (within ? ", as close as the target is known" : "") << " (settle.json, target_phi.short_of_target)\n";
   }
+  if (off_target) return kTargetNotReached;
   return kSuccess;
 }
 
@@ -236,8 +248,9 @@ Runner add_settle_command(CLI::App& app) {
       "clusters with the reason.");
   cmd->footer(
       "Exit codes: 0 ok, 2 bad input or a scene settle does not serve, 5 an engine failed (its folder's "
-      "relax_failure.json says how), 6 the target was not reached (the settled packing is written), 128+N stopped "
-      "by signal N.");
+      "relax_failure.json says how), 6 the settled bed is not within 2 standard errors of the target (the compaction "
+      "came to rest short of it, or the material pours looser than BTR places grains; the settled packing is written, "
+      "settle.json target_phi says which), 128+N stopped by signal N.");
   cmd->add_option("scene", o->scene, "SCENE.toml")->required()->check(CLI::ExistingFile);
   cmd->add_option("-o,--out", o->out, "output folder, created if missing")->required();
   cmd->add_option("--engine", o->engine, "liggghts | yade (default: the scene's relax.engine)")

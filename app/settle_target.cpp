@@ -84,19 +84,4 @@ CalibratedTarget calibrated_target(const btr::CalibrationPlan& cal, int dimensio
   return t;
 }
 
-json looser_than_btr(double btr_phi, const CalibratedTarget& target) {
-  const double limit = target.phi + kLooserThanBtrErrors * target.standard_error;
-  if (!(btr_phi > limit)) return nullptr;
-  return {{"btr_bulk_packing_fraction", btr_phi},
-          {"target", target.phi},
-          {"standard_error", target.standard_error},
-          {"limit", limit},
-          {"calibration_bulk_coordination", target.from.value("bulk_coordination", json())},
-          {"why", "the BTR bed is denser than the calibration pour by more than " + btr::g6(kLooserThanBtrErrors) +
-                      " of the target's standard errors: this material pours looser than BTR places grains. Settle "
-                      "compacts and cannot loosen, so the settled bed keeps BTR's packing fraction and its contact "
-                      "network (compare the settled bulk coordination with the calibration pour's). Pour the scene "
-                      "(`btr pour`) for a DEM initial condition of this material"}};
-}
-
 }  // namespace btr_app

@@ -28,13 +28,4 @@ struct CalibratedTarget {
 CalibratedTarget calibrated_target(const btr::CalibrationPlan& cal, int dimension, const std::string& engine,
                                    const SettleRunOptions& o, const std::string& out, double target_error);
 
-// A BTR bed denser than the target by more than this many of the target's standard errors stands for a material
-// that pours looser than BTR places grains.
-constexpr double kLooserThanBtrErrors = 2.0;
-
-// settle.json's target_phi.looser_than_btr when the BTR bed's bulk packing fraction `btr_phi` is above the target
-// by more than kLooserThanBtrErrors standard errors, else null. Settle compacts and cannot loosen: such a bed keeps
-// BTR's packing fraction and contact network (docs/guide/settle.md, "A material that pours looser than BTR").
-nlohmann::json looser_than_btr(double btr_phi, const CalibratedTarget& target);
-
 }  // namespace btr_app
