@@ -92,6 +92,13 @@ int run(const Options& o, const CLI::App& cmd) {
       deposit = btr::run_scene(scene, seed, count, [&](std::int64_t d, std::int64_t n) { bar.update(d, n); });
     }
     btr_packing.grains = std::move(deposit.grains);
+    if (!heap) {
+      try {
+        btr::check_settle_window(btr_packing.grains, scene);
+      } catch (const btr::RelaxRefused& e) {
+        throw btr::SceneError(e.what());
+      }
+    }
     btr_packing.meta = scene_packing_meta(scene, btr_packing.grains, seed, "settle");
     btr_packing.meta["measures"] = measures_to_json(measure_in_scene(btr_packing.grains, scene));
     btr::write_packing((out / "btr").string(), scene.name, btr_packing);

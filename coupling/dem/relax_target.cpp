@@ -50,6 +50,7 @@ CompactionWindow compaction_window(const Grains& grains, const Scene& scene, dou
   }
   w.measured = true;
   w.initial_phi = b.packing_fraction;
+  w.grains = b.grains_in_window;
   const double m = margin * 2.0 * max_radius(grains);
   w.slab = b.slab;
   w.lo = b.window.lo;

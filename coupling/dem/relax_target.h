@@ -34,6 +34,7 @@ struct CompactionWindow {
   bool measured = false, valid = false, slab = false;
   Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
   double initial_phi = 0.0;
+  std::int64_t grains = 0;  // centred in the bulk window (before it is lowered for the compaction)
   std::string why;
 };
 CompactionWindow compaction_window(const Grains& grains, const Scene& scene, double margin, double target);

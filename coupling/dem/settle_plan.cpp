@@ -84,6 +84,20 @@ void check_settle_scene(const Scene& scene) {
            "settle it with relax.model = \"hertz\"");
 }
 
+void check_settle_window(const Grains& btr_bed, const Scene& scene) {
+  MetricsOptions o;
+  o.margin_diameters = kCalibrationMargin;
+  const BulkMeasures b = bulk_measures(btr_bed, scene.dimension, scene.container, o);
+  if (b.valid && b.grains_in_window >= kMinBedWindowGrains) return;
+  refuse_scene_field(scene, "container",
+                     "the bed's bulk window (" + g6(kCalibrationMargin) +
+                         " largest diameters from the floor, walls and surface) holds " +
+                         (b.valid ? std::to_string(b.grains_in_window) + " grains" : "no grain (" + b.note + ")") +
+                         "; settle needs at least " + std::to_string(kMinBedWindowGrains) +
+                         " there to measure a packing fraction to compact to and to judge the bed by: widen the "
+                         "container, give more grains, or pour the scene (`btr pour`)");
+}
+
 CalibrationPlan calibration_plan(const Scene& scene, std::int64_t grains) {
   CalibrationPlan plan;
   const int dim = scene.dimension;
@@ -163,16 +177,20 @@ double bed_depth_in_largest_diameters(const Grains& grains, const Scene& scene, 
 
 TargetMargin settle_target_margin(const Grains& btr_grains, const Scene& scene, double target) {
   const CompactionWindow judged = compaction_window(btr_grains, scene, kSettleTargetMargin, target);
-  if (judged.valid)
+  if (judged.valid && judged.grains >= kMinBedWindowGrains)
     return {kSettleTargetMargin,
             {{"value", kSettleTargetMargin},
              {"from", "btr measure's bulk window (largest diameters from the floor, walls and surface), where the "
                       "settled bed is measured: the BTR bed keeps it through the compaction"}}};
   return {kCalibrationMargin,
           {{"value", kCalibrationMargin},
-           {"from", "the calibration's bulk window: the BTR bed is too shallow for btr measure's " +
+           {"from", "the calibration's bulk window: the BTR bed has no window to watch at btr measure's " +
                         g6(kSettleTargetMargin) + " largest diameters (" +
-                        (judged.measured ? judged.why : "no bulk window: " + judged.why) + ")"}}};
+                        (!judged.measured ? "no bulk window: " + judged.why
+                         : !judged.valid  ? judged.why
+                                          : "its window holds " + std::to_string(judged.grains) + " grains, fewer than " +
+                                                std::to_string(kMinBedWindowGrains)) +
+                        ")"}}};
 }
 
 SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohmann::json& target_from,

@@ -58,6 +58,15 @@ void check_settle_scene(const Scene& scene);
 // Whether settle builds a heap (a point or region source) rather than a bed (rain).
 bool settle_builds_heap(const Scene& scene);
 
+// Fewest grains a bed's bulk window may hold, at the calibration's margin (the widest window settle watches): fewer
+// do not measure a packing fraction to compact to or to judge by. The beds settle was checked on hold 81 (a walled
+// box 10 largest diameters wide) to several thousand (docs/settle/README.md); a box 7 diameters wide holds 3 at
+// the judged margin.
+inline constexpr std::int64_t kMinBedWindowGrains = 50;
+// Throws RelaxRefused, naming the scene file and its container, when the BTR bed's bulk window holds fewer than
+// kMinBedWindowGrains grains (or none).
+void check_settle_window(const Grains& btr_bed, const Scene& scene);
+
 struct CalibrationPlan {
   Scene scene;              // the cell: the scene's grains and material in a periodic container, rain, `grains`
   std::int64_t grains = 0;  // count

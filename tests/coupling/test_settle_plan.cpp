@@ -302,6 +302,54 @@ TEST(SettlePlan, CompactionWatchesTheMeasuredWindowWhereTheBedKeepsIt) {
   EXPECT_NEAR(w.lo.z(), 6e-3, 1e-12);
 }
 
+// Spheres of radius 1 mm on a cubic lattice filling a walled square box n diameters wide, 12 layers deep (top at
+// 24 mm). Centres sit at odd millimetres; btr measure's window keeps those at least `margin` largest diameters
+// (2 margin mm) from the walls, the floor and the top.
+Scene narrow_box(int n) {
+  Scene s = bed(3);
+  s.container.kind = ContainerKind::Box;
+  s.container.size_x = s.container.size_y = 2e-3 * n;
+  return s;
+}
+Grains box_lattice(int n) {
+  Grains g;
+  for (int k = 0; k < 12; ++k)
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        Grain a;
+        a.x = Vec3((2 * i + 1 - n) * 1e-3, (2 * j + 1 - n) * 1e-3, (2 * k + 1) * 1e-3);
+        a.r = 1e-3;
+        g.push_back(a);
+      }
+  return g;
+}
+
+TEST(SettlePlan, ANarrowBedIsWatchedInTheWiderWindowAndOneTooNarrowForThatIsRefused) {
+  // 8 wide: margin 3 keeps |x|, |y| < 2 mm and z in (6, 18) mm: 2 x 2 columns x 6 layers = 24 grains, fewer than the
+  // least settle judges by; margin 2 keeps |x|, |y| < 4 mm and z in (4, 20) mm: 4 x 4 x 8 = 128
+  const Scene eight = narrow_box(8);
+  MetricsOptions o;
+  EXPECT_EQ(bulk_measures(box_lattice(8), 3, eight.container, o).grains_in_window, 24);
+  o.margin_diameters = kCalibrationMargin;
+  EXPECT_EQ(bulk_measures(box_lattice(8), 3, eight.container, o).grains_in_window, 128);
+  const TargetMargin m = settle_target_margin(box_lattice(8), eight, 0.6);
+  EXPECT_EQ(m.value, kCalibrationMargin);
+  EXPECT_NE(m.record["from"].get<std::string>().find("holds 24 grains"), std::string::npos) << m.record;
+  EXPECT_NO_THROW(check_settle_window(box_lattice(8), eight));
+
+  // 6 wide: margin 2 keeps 2 x 2 columns x 8 layers = 32 grains
+  const Scene six = narrow_box(6);
+  try {
+    check_settle_window(box_lattice(6), six);
+    ADD_FAILURE() << "a window of 32 grains was served";
+  } catch (const RelaxRefused& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(six.file), std::string::npos) << what;
+    EXPECT_NE(what.find("container"), std::string::npos) << what;
+    EXPECT_NE(what.find("holds 32 grains"), std::string::npos) << what;
+  }
+}
+
 // Four grains on the floor, four stacked on them: the mean column is two weights. Hertz on the floor (R* = r,
 // 1/Y* = 2 (1 - nu^2) / E): F = 4/3 Y* sqrt(r) delta^3/2, so the softening s that gives delta = 0.04 r under
 // F = 2 m g is s = 3 F / (4 Y* sqrt(r) (0.04 r)^3/2).
