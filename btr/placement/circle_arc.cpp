@@ -8,7 +8,8 @@ namespace btr {
 void CircleArc::bounds(Vec3& lo, Vec3& hi) const {
   // The ends, then the extremes of each component k, C_k -+ rho |(u_k, v_k)| where (cos t, sin t) is
   // -+(u_k, v_k) / |(u_k, v_k)|, when that point lies inside the arc (0, t_end): no inverse trigonometry.
-  const double ce = std::cos(t_end), se = std::sin(t_end);
+  const ArcDirection e = direction_of(t_end, end);
+  const double ce = e.c, se = e.s;
   const Vec3 p0 = C + rho * u, p1 = C + rho * (ce * u + se * v);
   lo = p0.cwiseMin(p1);
   hi = p0.cwiseMax(p1);
@@ -30,7 +31,9 @@ void CircleArc::bounds(Vec3& lo, Vec3& hi) const {
 // Roots of a cos t + b sin t = c without the amplitude's angle: with A^2 = a^2 + b^2 and q = sqrt(A^2 - c^2),
 // the rising root (t = phi - delta, phi = atan2(b, a), delta = acos(c / A)) has cos t = (a c + b q) / A^2 and
 // sin t = (b c - a q) / A^2, the falling one (t = phi + delta) cos t = (a c - b q) / A^2, sin t = (b c + a q) / A^2:
-// one atan2 each, and A^2 cancels in it.
+// one atan2 each, and A^2 cancels in it. |(x, y)| = A^2 exactly ((ac + bq)^2 + (bc - aq)^2 = (a^2 + b^2)(c^2 + q^2)), and
+// to a few ulps as computed (q^2 carries the round-off of A^2 - c^2, a few ulps of A^2): (x, y) / A^2 is the root's
+// direction without a square root.
 namespace {
 
 double wrap_after(double t, double t_min) {
@@ -42,22 +45,20 @@ double wrap_after(double t, double t_min) {
 }  // namespace
 
 double first_rising_root(double a, double b, double c, double t_min, double t_max, double screen,
-                         double* direction) {
+                         ArcDirection* direction) {
   const double A2 = a * a + b * b;
   if (A2 <= 0.0 || c * c > A2) return -1.0;
   const double q = std::sqrt(A2 - c * c);
   const double y = b * c - a * q, x = a * c + b * q;
-  if (screen < 5.0 || direction) {
-    const double p = pseudo_angle(x, y);
-    // Beyond t_max whatever t_min is (a root wrapped past t_min lies beyond 2 pi).
-    if (p > screen) return -1.0;
-    if (direction) *direction = p;
-  }
+  // Beyond t_max whatever t_min is (a root wrapped past t_min lies beyond 2 pi).
+  if (screen < 5.0 && pseudo_angle(x, y) > screen) return -1.0;
+  if (direction) *direction = {x / A2, y / A2};  // before the call: x and y need not be kept across it
   const double t = wrap_after(std::atan2(y, x), t_min);
   return t <= t_max ? t : -1.0;
 }
 
-int trig_roots(double a, double b, double c, double t_min, double t_max, double out[2], double screen) {
+int trig_roots(double a, double b, double c, double t_min, double t_max, double out[2], double screen,
+               ArcDirection directions[2]) {
   const double A2 = a * a + b * b;
   if (A2 <= 0.0 || c * c > A2) return 0;
   const double q = std::sqrt(A2 - c * c);
@@ -66,9 +67,14 @@ int trig_roots(double a, double b, double c, double t_min, double t_max, double 
   for (int k = 0; k < 2; ++k) {
     if (screen < 5.0 && pseudo_angle(xs[k], ys[k]) > screen) continue;
     const double t = wrap_after(std::atan2(ys[k], xs[k]), t_min);
-    if (t <= t_max) out[n++] = t;
+    if (t > t_max) continue;
+    if (directions) directions[n] = {xs[k] / A2, ys[k] / A2};
+    out[n++] = t;
   }
-  if (n == 2 && out[1] < out[0]) std::swap(out[0], out[1]);
+  if (n == 2 && out[1] < out[0]) {
+    std::swap(out[0], out[1]);
+    if (directions) std::swap(directions[0], directions[1]);
+  }
   return n;
 }
 

@@ -3,6 +3,7 @@
 // one grain (a meridian of the contact sphere) or on two supports (where two contact surfaces meet).
 #include <Eigen/Geometry>
 #include <cmath>
+#include <limits>
 
 #include "btr/model/grain.h"
 
@@ -10,16 +11,39 @@ namespace btr {
 
 constexpr double kTwoPi = 6.283185307179586476925286766559;
 
+// (cos t, sin t) for a parameter t of an arc, from the direction t was taken from: a root's, or an end's atan2
+// arguments, divided by their length. Reading a point or a box from it needs no cosine or sine. NaN: not known.
+struct ArcDirection {
+  double c, s;
+  static constexpr ArcDirection unknown() {
+    return {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};
+  }
+  bool known() const { return c == c; }
+  // The direction of (x, y); not known when (x, y) = 0.
+  static ArcDirection of(double x, double y) {
+    const double h = std::sqrt(x * x + y * y);
+    return {x / h, y / h};
+  }
+};
+inline constexpr ArcDirection kArcStart{1.0, 0.0};  // the direction of t = 0
+// d when known, else the direction of the angle t.
+inline ArcDirection direction_of(double t, ArcDirection d) {
+  return d.known() ? d : ArcDirection{std::cos(t), std::sin(t)};
+}
+
 struct CircleArc {
   Vec3 C = Vec3::Zero();
   double rho = 0.0;
   Vec3 u = Vec3::UnitX(), v = Vec3::UnitY();  // orthonormal; P(0) = C + rho u, P'(0) along v
   double t_end = 0.0;
-  // The pseudo-angle (pseudo_angle, below) of the direction t_end was taken from (its atan2's arguments), when the
-  // caller knows it: the root screens at the arc's end then need no cosine or sine. Negative: not known.
-  double end_direction = -1.0;
+  // The direction of t_end when the caller knows it (set_end). Code that sets t_end alone must leave it unknown.
+  ArcDirection end = ArcDirection::unknown();
 
+  void set_end(double t, ArcDirection direction) { t_end = t, end = direction; }
   Vec3 at(double t) const { return C + rho * (std::cos(t) * u + std::sin(t) * v); }
+  Vec3 at(ArcDirection d) const { return C + rho * (d.c * u + d.s * v); }
+  // The point at t, from its direction d when that is known.
+  Vec3 at(double t, ArcDirection d) const { return at(direction_of(t, d)); }
   Vec3 tangent(double t) const { return -std::sin(t) * u + std::cos(t) * v; }
   Vec3 axis() const { return u.cross(v); }
   // Axis-aligned box around the arc.
@@ -29,9 +53,9 @@ struct CircleArc {
 // Smallest t in (t_min, t_max] with a cos t + b sin t = c where the left side is increasing
 // (crossing c from below). Returns a negative value when there is none. screen (optional) is
 // root_screen(t_max): a root whose direction lies beyond it is rejected before its angle is computed.
-// direction (optional) receives the pseudo-angle of the root's direction when a root is returned.
+// direction (optional) receives the root's direction (cos t, sin t) when a root is returned.
 double first_rising_root(double a, double b, double c, double t_min, double t_max, double screen = 5.0,
-                         double* direction = nullptr);
+                         ArcDirection* direction = nullptr);
 
 // A monotone stand-in for the angle of the direction (x, y) over [0, 2 pi), in [0, 4): comparing two of
 // them orders the angles without inverse trigonometry.
@@ -40,7 +64,8 @@ inline double pseudo_angle(double x, double y) {
   return y >= 0.0 ? 1.0 - p : 3.0 + p;
 }
 // cos t and sin t to about 1e-15 (Taylor polynomials on [-pi/4, pi/4] after reduction by quarter
-// turns): for the screen below, which needs far less than the library's last-bit accuracy.
+// turns): for the screen below and the roll queries' part boxes, which need far less than the library's
+// last-bit accuracy.
 inline void screen_cos_sin(double t, double& c, double& s) {
   constexpr double kHalfPiHi = 1.5707963267948966, kHalfPiLo = 6.123233995736766e-17;
   const double k = std::nearbyint(t * (2.0 / M_PI));
@@ -69,19 +94,18 @@ inline double root_screen(double t_max) {
   screen_cos_sin(t_max, c, s);
   return pseudo_angle(c, s) + kScreenMargin;
 }
-// root_screen(t_max) without a cosine or sine, from p, the pseudo-angle of a direction at most 1e-12 rad before
-// t_max's (a root's own, for the roots up to it plus a tie): over that angle the pseudo-angle grows by at most
-// as much (its slope is at most 1), far within the margin.
-inline double root_screen_after(double t_max, double p) { return has_root_screen(t_max) ? p + kScreenMargin : 5.0; }
-// root_screen(t + extra) (extra at most 1e-12) for a parameter t of the arc: from its end direction when t is its end.
-inline double arc_root_screen(const CircleArc& arc, double t, double extra) {
-  if (t == arc.t_end && arc.end_direction >= 0.0) return root_screen_after(t + extra, arc.end_direction);
-  return root_screen(t + extra);
+// root_screen(t + extra) (extra at most 1e-12) without a cosine or sine when d, the direction of t, is known (an
+// event's: a root's own or the arc's end's): over that angle the pseudo-angle grows by at most as much (its slope
+// is at most 1), far within the margin.
+inline double root_screen_after(double t, ArcDirection d, double extra) {
+  if (!d.known()) return root_screen(t + extra);
+  return has_root_screen(t + extra) ? pseudo_angle(d.c, d.s) + kScreenMargin : 5.0;
 }
 
 // All t in (t_min, t_max] with a cos t + b sin t = c, ascending; returns how many (0, 1 or 2).
-// screen as for first_rising_root.
-int trig_roots(double a, double b, double c, double t_min, double t_max, double out[2], double screen = 5.0);
+// screen as for first_rising_root; directions (optional) receives the roots' directions.
+int trig_roots(double a, double b, double c, double t_min, double t_max, double out[2], double screen = 5.0,
+               ArcDirection directions[2] = nullptr);
 
 // The arc inside a tube: the surface at distance R from the line through `point` along coordinate axis
 // `axis` (2: the vertical cylinder; 1: the drum). The squared distance from the line is the

@@ -4,6 +4,7 @@
 #include <new>
 #include <type_traits>
 
+#include "btr/placement/circle_arc.h"
 #include "btr/placement/descent.h"
 #include "btr/placement/obstacle.h"
 
@@ -64,13 +65,15 @@ struct Contacts {
 // A constructor rather than aggregate initialisation: `Event{t, {}, -1}` zero-filled the whole of `hits`
 // (800 bytes) at every fall and roll.
 struct Event {
-  explicit Event(double t_end) : t(t_end) {}
+  explicit Event(double t_end, ArcDirection end = ArcDirection::unknown()) : t(t_end), direction(end) {}
   double t;
+  ArcDirection direction;  // on an arc, t's direction when the offer that set t knew it
   Contacts hits;
   int lift_off = -1;  // index in the active contacts of a support that unloads
-  void offer(double t_new, const Obstacle& o, double tol) {
+  void offer(double t_new, const Obstacle& o, double tol, ArcDirection at = ArcDirection::unknown()) {
     if (t_new < t - tol) {
       t = t_new;
+      direction = at;
       hits.n = 0;
       hits.overflow = false;
       lift_off = -1;

@@ -173,7 +173,7 @@ void Deposition::Impl::fall(Vec3& x, double r, Contacts& active, const std::vect
 void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const CircleArc& arc,
                                    const std::vector<Obstacle>& walls) {
   const double t_tol = 1e-13;
-  Event ev(arc.t_end);
+  Event ev(arc.t_end, arc.end);
 
   auto offer_plane = [&](const Obstacle& o) {
     if (active.has(o.key)) return;
@@ -182,9 +182,10 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
     // Touching includes a start a hair inside (round-off of earlier rolls along the wall, up to the 1e-7 r
     // that back_inside_walls puts right): moving further in from there is a contact at once.
     const bool touching = g0 + a <= 1e-9 * r;
-    if (touching && b < -kApproach * arc.rho) { ev.offer(0.0, o, t_tol); return; }
-    double t = first_rising_root(-a, -b, g0, touching ? kSkipTangency : 0.0, ev.t + t_tol);
-    if (t >= 0.0) ev.offer(t, o, t_tol);
+    if (touching && b < -kApproach * arc.rho) { ev.offer(0.0, o, t_tol, kArcStart); return; }
+    ArcDirection direction;
+    const double t = first_rising_root(-a, -b, g0, touching ? kSkipTangency : 0.0, ev.t + t_tol, 5.0, &direction);
+    if (t >= 0.0) ev.offer(t, o, t_tol, direction);
   };
   // The vertical cylinder and a drum (an arc out of the planes y = const): the squared distance from the
   // axis is of degree 2 in cos t, sin t; its first rise through R^2 by branch and bound.
@@ -217,9 +218,10 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
     const double a = 2.0 * arc.rho * w.dot(arc.u), b = 2.0 * arc.rho * w.dot(arc.v);
     const double R2 = o.R * o.R;
     const bool touching = K + a - R2 >= -1e-9 * R2;  // a start a hair beyond the wall included, as for planes
-    if (touching && b > 2.0 * kApproach * arc.rho * o.R) { ev.offer(0.0, o, t_tol); return; }
-    double t = first_rising_root(a, b, R2 - K, touching ? kSkipTangency : 0.0, ev.t + t_tol);
-    if (t >= 0.0) ev.offer(t, o, t_tol);
+    if (touching && b > 2.0 * kApproach * arc.rho * o.R) { ev.offer(0.0, o, t_tol, kArcStart); return; }
+    ArcDirection direction;
+    const double t = first_rising_root(a, b, R2 - K, touching ? kSkipTangency : 0.0, ev.t + t_tol, 5.0, &direction);
+    if (t >= 0.0) ev.offer(t, o, t_tol, direction);
   };
   // In a drum the floor only touches the drum's lowest line, where the drum wall is met first.
   const bool drum_container = container.kind == ContainerKind::Drum;
@@ -232,7 +234,7 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
   offer_grains_on_arc(grid, r, r_max, active, arc, x, ev);
   if (active.n == 2) offer_lift_offs(active, arc, ev);
 
-  x = arc.at(ev.t);
+  x = arc.at(ev.t, ev.direction);
   if (ev.lift_off >= 0) active.remove(ev.lift_off);
   active.add_all(ev.hits);
 }
@@ -634,8 +636,7 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
           stable = true;
           break;
         }
-        arc.t_end = t_low;
-        arc.end_direction = pseudo_angle(-arc.u.z(), -arc.v.z());
+        arc.set_end(t_low, ArcDirection::of(-arc.u.z(), -arc.v.z()));
         const Vec3 before = x;
         roll_on_arc(x, r, active, arc, walls);
         // Wedged a hair (~1e-8 rad) beside the lowest line against a grain that the descent, at round-off,
@@ -663,8 +664,8 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
       arc.u = (x - p.c).normalized();
       arc.v = (d - d.dot(arc.u) * arc.u).normalized();
       const double equator = std::atan2(arc.u.z(), -arc.v.z());  // the support's equator
-      arc.t_end = std::max(0.0, equator);
-      if (equator > 0.0) arc.end_direction = pseudo_angle(-arc.v.z(), arc.u.z());
+      if (equator > 0.0) arc.set_end(equator, ArcDirection::of(-arc.v.z(), arc.u.z()));
+      else arc.set_end(0.0, kArcStart);
     } else if (drums == 0 && ((spheres == 2 && planes == 0 && cylinders == 0) ||
                               (spheres == 1 && planes == 1 && cylinders == 0))) {
       int qi = pi;  // the second support: the plane, or the second sphere
@@ -688,8 +689,7 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
       if (arc.v.dot(d) < 0.0) arc.v = -arc.v;
       double t_low = std::atan2(-arc.v.z(), -arc.u.z());
       if (t_low <= 0.0) t_low += kTwoPi;
-      arc.t_end = t_low;  // the lowest point of the circle
-      arc.end_direction = pseudo_angle(-arc.u.z(), -arc.v.z());
+      arc.set_end(t_low, ArcDirection::of(-arc.u.z(), -arc.v.z()));  // the lowest point of the circle
     } else if (spheres == 1 && cylinders == 1 && planes == 0 && drums == 0) {
       if (roll_along_cylinder(x, r, active, si, ci, d, walls)) stable = true;
       continue;

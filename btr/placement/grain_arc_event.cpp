@@ -13,6 +13,13 @@ namespace {
 // Events closer than this (radians) are simultaneous.
 constexpr double kTieT = 1e-13;
 
+// (cos t, sin t) of the part boxes' split (no result depends on its last bits: the parts only gather candidates).
+ArcDirection split_direction(double t) {
+  ArcDirection d;
+  screen_cos_sin(t, d.c, d.s);
+  return d;
+}
+
 }  // namespace
 
 void offer_grains_on_arc(const NeighbourGrid& grid, double r, double r_max, const Contacts& supports,
@@ -32,31 +39,29 @@ void offer_grains_on_arc(const NeighbourGrid& grid, double r, double r_max, cons
     // (round-off puts a root there) and look for the next crossing.
     const bool touching = K + a - R2 <= 1e-9 * R2;  // a start a hair inside included, as for walls
     if (touching && b < -2.0 * kApproach * arc.rho * o.R) {
-      ev.offer(0.0, o, kTieT);
+      ev.offer(0.0, o, kTieT, kArcStart);
       return;
     }
-    if (screen_t != ev.t) screen_t = ev.t, screen = arc_root_screen(arc, ev.t, kTieT);
-    double direction;
+    if (screen_t != ev.t) screen_t = ev.t, screen = root_screen_after(ev.t, ev.direction, kTieT);
+    ArcDirection direction;
     const double t = first_rising_root(-a, -b, K - R2, touching ? kSkipTangency : 0.0, ev.t + kTieT, screen,
                                        &direction);
-    if (t < 0.0) return;
-    ev.offer(t, o, kTieT);
-    // A new event at t: its screen from the root's own direction.
-    if (ev.t == t && screen_t != t) screen_t = t, screen = root_screen_after(t + kTieT, direction);
+    if (t >= 0.0) ev.offer(t, o, kTieT, direction);
   };
   // In two parts: first the grains near the arc's first stretch (1.5 radii of travel), where a rolling grain
   // usually meets the next one; only if no event is found there, those near the rest of the arc up to the
   // event so far. An obstacle met before the event found lies near the part of the arc before it, so the
   // first visit alone suffices when the event is in its part.
   const Vec3 reach = Vec3::Constant(r + r_max);
-  auto visit_part = [&](double t0, double t1) {
+  // The part from t0 to t1 (directions d0 and d1, known): rotated to start at t0, its end relative to that.
+  auto visit_part = [&](double t0, ArcDirection d0, double t1, ArcDirection d1) {
     CircleArc part = arc;
     if (t0 != 0.0) {
-      const double c0 = std::cos(t0), s0 = std::sin(t0);
-      part.u = c0 * arc.u + s0 * arc.v;
-      part.v = c0 * arc.v - s0 * arc.u;
+      part.u = d0.c * arc.u + d0.s * arc.v;
+      part.v = d0.c * arc.v - d0.s * arc.u;
+      d1 = {d1.c * d0.c + d1.s * d0.s, d1.s * d0.c - d1.c * d0.s};
     }
-    part.t_end = t1 - t0;
+    part.set_end(t1 - t0, d1);
     Vec3 plo, phi;
     part.bounds(plo, phi);
     if (t0 == 0.0) plo = plo.cwiseMin(start), phi = phi.cwiseMax(start);  // the start exactly, whatever round-off
@@ -74,8 +79,9 @@ void offer_grains_on_arc(const NeighbourGrid& grid, double r, double r_max, cons
     });
   };
   const double first = std::min(arc.t_end, 1.5 * r / arc.rho);
-  visit_part(0.0, first);
-  if (ev.t > first) visit_part(first, ev.t);
+  const ArcDirection split = first == arc.t_end ? direction_of(first, arc.end) : split_direction(first);
+  visit_part(0.0, kArcStart, first, split);
+  if (ev.t > first) visit_part(first, split, ev.t, direction_of(ev.t, ev.direction));
 }
 
 // A support lifts off where its load changes sign: gravity's part normal to the path is then parallel to the
@@ -85,7 +91,7 @@ void offer_lift_offs(const Contacts& supports, const CircleArc& arc, Event& ev) 
   // double), the same value at several times the cost.
   auto vertical_cross = [](const Vec3& p, const Vec3& q) { return p.x() * q.y() - p.y() * q.x(); };
   const Vec3 z = Vec3::UnitZ();
-  double lift_screen_t = ev.t, lift_screen = arc_root_screen(arc, ev.t, 0.0);  // recomputed when a lift-off moves ev.t
+  double lift_screen_t = ev.t, lift_screen = root_screen_after(ev.t, ev.direction, 0.0);  // again when a lift-off moves ev.t
   for (int k = 0; k < 2; ++k) {
     const Obstacle& other = supports.item[1 - k];
     double a, b, c;
@@ -99,9 +105,10 @@ void offer_lift_offs(const Contacts& supports, const CircleArc& arc, Event& ev) 
       b = -vertical_cross(arc.u, other.c);
       c = 0.0;
     }
-    if (lift_screen_t != ev.t) lift_screen_t = ev.t, lift_screen = arc_root_screen(arc, ev.t, 0.0);
+    if (lift_screen_t != ev.t) lift_screen_t = ev.t, lift_screen = root_screen_after(ev.t, ev.direction, 0.0);
     double roots[2];
-    const int n = trig_roots(a, b, c, kTieT, ev.t, roots, lift_screen);
+    ArcDirection directions[2];
+    const int n = trig_roots(a, b, c, kTieT, ev.t, roots, lift_screen, directions);
     for (int m = 0; m < n; ++m) {
       // Load of support k just after the root.
       const double t = std::min(roots[m] + 1e-7, 0.5 * (roots[m] + arc.t_end));
@@ -109,6 +116,7 @@ void offer_lift_offs(const Contacts& supports, const CircleArc& arc, Event& ev) 
       const Vec3 g_perp = z - z.dot(T) * T;
       if (unloads(g_perp, supports.item[k].normal(P), other.normal(P)) && roots[m] < ev.t - kTieT) {
         ev.t = roots[m];
+        ev.direction = directions[m];
         ev.hits.n = 0;
         ev.lift_off = k;
         break;
@@ -119,7 +127,7 @@ void offer_lift_offs(const Contacts& supports, const CircleArc& arc, Event& ev) 
 
 Event first_grain_event(const NeighbourGrid& grid, double r, double r_max, const Contacts& supports,
                         const CircleArc& arc) {
-  Event ev(arc.t_end);
+  Event ev(arc.t_end, arc.end);
   offer_grains_on_arc(grid, r, r_max, supports, arc, arc.at(0.0), ev);
   if (supports.n == 2) offer_lift_offs(supports, arc, ev);
   return ev;

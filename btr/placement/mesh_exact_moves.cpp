@@ -104,7 +104,7 @@ int Walker::roll_exact(Vec3& x, const Vec3& d) {
   Contacts supports;
   for (int k = 0; k < n; ++k) supports.add(sup[k]);
   const Event ev = first_grain_event(e.grid, r, e.r_max, supports, part);
-  x = arc.at(ev.t);
+  x = arc.at(ev.t, ev.direction);
   if (ev.hits.overflow) {
     std::ostringstream why;
     why << "more than " << kMaxContacts << " simultaneous contacts";
