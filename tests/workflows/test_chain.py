@@ -66,7 +66,7 @@ def test_pipeline_with_each_engine(tmp_path, source_dir, btr_binary, engine):
 
 
 def test_failed_step_keeps_earlier_outputs(tmp_path, source_dir, btr_binary):
-    scene = tiny_bed_toml(tmp_path / "chain.toml", count=60, max_time=0.02)
+    scene = tiny_bed_toml(tmp_path / "chain.toml", count=300, max_time=0.02)  # a bulk window settle accepts
     out = tmp_path / "out"
     # the engine cannot be started: liggghts is not on PATH
     p = subprocess.run([sys.executable, str(source_dir / "workflows" / "btr_workflow.py"), "pipeline", scene,
