@@ -89,13 +89,15 @@ void check_settle_window(const Grains& btr_bed, const Scene& scene) {
   o.margin_diameters = kCalibrationMargin;
   const BulkMeasures b = bulk_measures(btr_bed, scene.dimension, scene.container, o);
   if (b.valid && b.grains_in_window >= kMinBedWindowGrains) return;
-  refuse_scene_field(scene, "container",
-                     "the bed's bulk window (" + g6(kCalibrationMargin) +
-                         " largest diameters from the floor, walls and surface) holds " +
-                         (b.valid ? std::to_string(b.grains_in_window) + " grains" : "no grain (" + b.note + ")") +
-                         "; settle needs at least " + std::to_string(kMinBedWindowGrains) +
-                         " there to measure a packing fraction to compact to and to judge the bed by: widen the "
-                         "container, give more grains, or pour the scene (`btr pour`)");
+  const std::string needs = "settle needs at least " + std::to_string(kMinBedWindowGrains) +
+                            " there to measure a packing fraction to compact to and to judge the bed by: ";
+  const std::string window = "the bed's bulk window (" + g6(kCalibrationMargin) +
+                             " largest diameters from the floor, walls and surface) holds ";
+  if (!b.valid)  // too shallow: no window at all
+    refuse_scene_field(scene, "grains.count", window + "no grain (" + b.note + "); " + needs +
+                                                  "give more grains, or pour the scene (`btr pour`)");
+  refuse_scene_field(scene, "container", window + std::to_string(b.grains_in_window) + " grains; " + needs +
+                                             "widen the container, give more grains, or pour the scene (`btr pour`)");
 }
 
 CalibrationPlan calibration_plan(const Scene& scene, std::int64_t grains) {

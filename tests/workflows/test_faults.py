@@ -117,7 +117,7 @@ def test_a_workflow_stopped_by_sigterm_stops_its_program_and_records_the_case(bt
     out = tmp_path / "study"
     env = dict(os.environ, BTR_BINARY=btr_binary)
     proc = subprocess.Popen([sys.executable, str(source_dir / "workflows" / "btr_workflow.py"), "pipeline",
-                             str(source_dir / "inputs" / "bed3d.toml"), "-o", str(out), "--count", "1500"],
+                             str(source_dir / "inputs" / "bed3d.toml"), "-o", str(out), "--count", "5000"],
                             env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         relax_dir = wait_for(lambda: next((p for p in out.rglob("in.btr") if processes_in(p.parent)), None), 120)
