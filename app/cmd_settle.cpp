@@ -219,20 +219,10 @@ int run(const Options& o, const CLI::App& cmd) {
       std::to_string(record["wall_seconds"].get<double>()) + " s");
   say("wrote " + o.out + "/" + scene.name + ".csv (.json, .vtp), settle.json, dem_input/, and each step's folder "
       "(btr/, calibration/, " + std::string(heap ? "btr_heap/, " : "") + "relax/)");
-  if (reached.is_object() && reached.contains("looser_than_btr")) {
-    std::cerr << "btr settle: the BTR bed (bulk phi " << btr::g6(reached["initial_bulk_packing_fraction"].get<double>())
-              << ") is denser than the target " << btr::g6(target) << " +- " << btr::g6(calibrated.standard_error)
-              << ": this material pours looser than BTR places grains, and settle cannot loosen a bed. The settled "
-                 "packing is written (settle.json, target_phi.looser_than_btr)\n";
-    return kTargetNotReached;
-  }
-  if (reached.is_object() && reached.contains("short_of_target")) {
-    const bool within = reached["short_of_target"]["within_precision"].get<bool>();
-    std::cerr << "btr settle: the compaction came to rest below the target packing fraction " << btr::g6(target)
-              << "; the settled bed is " << (within ? "within " : "further than ") << btr::g6(btr::kTargetPrecisionErrors)
-              << " of the target's standard errors (" << btr::g6(calibrated.standard_error) << ") from it"
-              << (within ? ", as close as the target is known" : "") << " (settle.json, target_phi.short_of_target)\n";
-  }
+  for (const char* verdict : {"looser_than_btr", "short_of_target"})
+    if (reached.is_object() && reached.contains(verdict))
+      std::cerr << "btr settle: " << reached[verdict]["why"].get<std::string>() << " (settle.json, target_phi." << verdict
+                << ")" << (off_target ? "; the settled packing is written" : "") << "\n";
   if (off_target) return kTargetNotReached;
   return kSuccess;
 }

@@ -46,6 +46,8 @@ struct CircleArc {
   Vec3 at(double t, ArcDirection d) const { return at(direction_of(t, d)); }
   Vec3 tangent(double t) const { return -std::sin(t) * u + std::cos(t) * v; }
   Vec3 axis() const { return u.cross(v); }
+  // The direction of the circle's lowest point: (cos t, sin t) along (-u_z, -v_z).
+  ArcDirection lowest_direction() const { return ArcDirection::of(-u.z(), -v.z()); }
   // Axis-aligned box around the arc.
   void bounds(Vec3& lo, Vec3& hi) const;
 };

@@ -636,7 +636,7 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
           stable = true;
           break;
         }
-        arc.set_end(t_low, ArcDirection::of(-arc.u.z(), -arc.v.z()));
+        arc.set_end(t_low, arc.lowest_direction());
         const Vec3 before = x;
         roll_on_arc(x, r, active, arc, walls);
         // Wedged a hair (~1e-8 rad) beside the lowest line against a grain that the descent, at round-off,
@@ -689,7 +689,7 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
       if (arc.v.dot(d) < 0.0) arc.v = -arc.v;
       double t_low = std::atan2(-arc.v.z(), -arc.u.z());
       if (t_low <= 0.0) t_low += kTwoPi;
-      arc.set_end(t_low, ArcDirection::of(-arc.u.z(), -arc.v.z()));  // the lowest point of the circle
+      arc.set_end(t_low, arc.lowest_direction());  // the lowest point of the circle
     } else if (spheres == 1 && cylinders == 1 && planes == 0 && drums == 0) {
       if (roll_along_cylinder(x, r, active, si, ci, d, walls)) stable = true;
       continue;

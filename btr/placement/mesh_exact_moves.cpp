@@ -100,7 +100,7 @@ int Walker::roll_exact(Vec3& x, const Vec3& d) {
   if (clear < 0.1 * r) return 0;
   CircleArc part = arc;
   const bool whole = clear * (1.0 - 1e-9) >= arc.rho * arc.t_end;
-  if (!whole) part.t_end = clear * (1.0 - 1e-9) / arc.rho;
+  if (!whole) part.set_end(clear * (1.0 - 1e-9) / arc.rho, ArcDirection::unknown());
   Contacts supports;
   for (int k = 0; k < n; ++k) supports.add(sup[k]);
   const Event ev = first_grain_event(e.grid, r, e.r_max, supports, part);

@@ -19,8 +19,9 @@ TargetVerdict settle_target_verdict(double btr_phi, double settled_phi, bool com
         {"standard_error", standard_error},
         {"limit", target + reach},
         {"calibration_bulk_coordination", calibration_coordination},
-        {"why", "the BTR bed is denser than the calibration pour by more than " + g6(kTargetPrecisionErrors) +
-                    " of the target's standard errors: this material pours looser than BTR places grains. Settle "
+        {"why", "the BTR bed (bulk phi " + g6(btr_phi) + ") is denser than the target " + g6(target) + " +- " +
+                    g6(standard_error) + " by more than " + g6(kTargetPrecisionErrors) +
+                    " of its standard errors: this material pours looser than BTR places grains. Settle "
                     "compacts and cannot loosen, so the settled bed keeps BTR's packing fraction and its contact "
                     "network (compare the settled bulk coordination with the calibration pour's). Pour the scene "
                     "(`btr pour`) for a DEM initial condition of this material"}};
@@ -34,9 +35,10 @@ TargetVerdict settle_target_verdict(double btr_phi, double settled_phi, bool com
         {"standard_error", standard_error},
         {"limit", target - reach},
         {"within_precision", within},
-        {"why", std::string("the compaction came to rest below the target; the settled bed is ") +
-                    (within ? "within " : "further than ") + g6(kTargetPrecisionErrors) +
-                    " of the target's standard errors from it"}};
+        {"why", "the compaction came to rest below the target " + g6(target) + " +- " + g6(standard_error) +
+                    "; the settled bed (" + (std::isfinite(settled_phi) ? g6(settled_phi) : std::string("no bulk window")) +
+                    ") is " + (within ? "within " : "further than ") + g6(kTargetPrecisionErrors) +
+                    " of its standard errors from it" + (within ? ", as close as the target is known" : "")}};
   }
   return v;
 }
