@@ -43,4 +43,30 @@ TargetVerdict settle_target_verdict(double btr_phi, double settled_phi, bool com
   return v;
 }
 
+nlohmann::json relaxation_not_at_rest(const std::string& stop_reason, const std::string& stop_rule, double threshold,
+                                      double final_value, double simulated_time, const Grains& grains,
+                                      const std::vector<Vec3>& velocities, bool heap) {
+  if (stop_reason != "max-time") return nullptr;
+  nlohmann::json record = {{"stop_rule", stop_rule},
+                           {"threshold", threshold},
+                           {"final_value", std::isfinite(final_value) ? nlohmann::json(final_value) : nlohmann::json()},
+                           {"simulated_seconds", simulated_time}};
+  std::string fastest;
+  if (!velocities.empty() && velocities.size() == grains.size()) {
+    std::size_t k = 0;
+    for (std::size_t i = 1; i < velocities.size(); ++i)
+      if (velocities[i].squaredNorm() > velocities[k].squaredNorm()) k = i;
+    const double speed = velocities[k].norm();
+    record["fastest_grain"] = {{"id", k + 1}, {"speed", speed}, {"x", {grains[k].x.x(), grains[k].x.y(), grains[k].x.z()}}};
+    fastest = "; its fastest grain (id " + std::to_string(k + 1) + ") moved at " + g6(speed) + " m/s";
+  }
+  record["why"] = "the relaxation ran to its max time (" + g6(simulated_time) + " s simulated) without its stop rule (" +
+                  stop_rule + " below " + g6(threshold) + (std::isfinite(final_value) ? ", at the end " + g6(final_value) : "") +
+                  "): the packing was still moving when it was written" + fastest +
+                  (heap ? ". A heap whose toe rolls on the floor (no rolling resistance) has no rest state: its angle "
+                          "follows the time it is given, as a pour's does (docs/settle/heaps/README.md)"
+                        : "");
+  return record;
+}
+
 }  // namespace btr

@@ -1,7 +1,12 @@
 #pragma once
 // Whether a settled bed stands where its calibration asked, judged against the target's own precision (its
 // standard error): `btr settle` exits with 6 when it does not (app/cmd_settle.cpp; docs/guide/settle.md).
+#include <string>
+#include <vector>
+
 #include <nlohmann/json.hpp>
+
+#include "btr/model/grain.h"
 
 namespace btr {
 
@@ -25,5 +30,13 @@ struct TargetVerdict {
 TargetVerdict settle_target_verdict(double btr_phi, double settled_phi, bool compaction_ran, bool compaction_reached,
                                     double target, double standard_error,
                                     const nlohmann::json& calibration_coordination);
+
+// settle.json's relax.not_at_rest: the relaxation ran to its max time without its stop rule firing, so the
+// packing was still moving when it was written (a heap's toe without rolling resistance rolls out for as long as
+// it runs: docs/settle/heaps/README.md). Null when the rule fired. final_value: the rule's measure at the end (NaN if
+// the engine did not report it); velocities: each grain's at the end, in the order of grains (grain k has id k + 1).
+nlohmann::json relaxation_not_at_rest(const std::string& stop_reason, const std::string& stop_rule, double threshold,
+                                      double final_value, double simulated_time, const Grains& grains,
+                                      const std::vector<Vec3>& velocities, bool heap);
 
 }  // namespace btr

@@ -4,6 +4,8 @@
 // both engines (the calibration is the scene softened, its angle the one chosen, the settled heap near it); and
 // the refusals (exit 2, naming the file and the field, nothing written).
 #include <gtest/gtest.h>
+#include <cmath>
+#include <cstdio>
 #include <unistd.h>
 
 #include <filesystem>
@@ -235,6 +237,28 @@ TEST_F(SettleCli, TinyHeapInLiggghtsAndYade) {
     EXPECT_GT(plain_heap.angle_deg, settled_heap.angle_deg + 10.0);
     EXPECT_NEAR(rec["angle_deg"]["settled"].get<double>(), settled_heap.angle_deg, 1e-9);
     EXPECT_TRUE(fs::exists(out / "dem_input" / (engine == "liggghts" ? "in.btr" : "relax_yade.py")));
+
+    // A relaxation that ran to its max time is recorded as not at rest, with its fastest grain (checked against
+    // the engine's final velocities); one stopped by its rule is not.
+    const nlohmann::json& relax_step = rec["steps"][3];
+    ASSERT_EQ(relax_step.contains("not_at_rest"), relax_step["stop_reason"] == "max-time") << relax_step.dump();
+    if (relax_step.contains("not_at_rest")) {
+      std::ifstream csv(out / "relax" / "velocities.csv");
+      std::string line;
+      std::getline(csv, line);
+      double fastest = 0.0;
+      long fastest_id = 0;
+      while (std::getline(csv, line)) {
+        long id;
+        double vx, vy, vz;
+        ASSERT_EQ(std::sscanf(line.c_str(), "%ld,%lf,%lf,%lf", &id, &vx, &vy, &vz), 4) << line;
+        const double speed = std::sqrt(vx * vx + vy * vy + vz * vz);
+        if (speed > fastest) fastest = speed, fastest_id = id;
+      }
+      const nlohmann::json& grain = relax_step["not_at_rest"]["fastest_grain"];
+      EXPECT_EQ(grain["id"].get<long>(), fastest_id);
+      EXPECT_NEAR(grain["speed"].get<double>(), fastest, 1e-12 + 1e-9 * fastest);
+    }
   }
 }
 
