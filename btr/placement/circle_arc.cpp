@@ -44,15 +44,16 @@ double wrap_after(double t, double t_min) {
 
 }  // namespace
 
+double angle_after(double x, double y, double t_min) { return wrap_after(std::atan2(y, x), t_min); }
+
 double first_rising_root(double a, double b, double c, double t_min, double t_max, double screen,
                          ArcDirection* direction) {
-  const double A2 = a * a + b * b;
-  if (A2 <= 0.0 || c * c > A2) return -1.0;
-  const double q = std::sqrt(A2 - c * c);
-  const double y = b * c - a * q, x = a * c + b * q;
+  TrigRoot root;
+  if (!rising_root(a, b, c, root)) return -1.0;
+  const double x = root.x, y = root.y;
   // Beyond t_max whatever t_min is (a root wrapped past t_min lies beyond 2 pi).
   if (screen < 5.0 && pseudo_angle(x, y) > screen) return -1.0;
-  if (direction) *direction = {x / A2, y / A2};  // before the call: x and y need not be kept across it
+  if (direction) *direction = {x / root.A2, y / root.A2};  // before the call: x and y need not be kept across it
   const double t = wrap_after(std::atan2(y, x), t_min);
   return t <= t_max ? t : -1.0;
 }

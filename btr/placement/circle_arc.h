@@ -59,6 +59,19 @@ struct CircleArc {
 double first_rising_root(double a, double b, double c, double t_min, double t_max, double screen = 5.0,
                          ArcDirection* direction = nullptr);
 
+// The rising root of a cos t + b sin t = c as its direction (x, y) = A^2 (cos t, sin t), A^2 = a^2 + b^2 (the
+// arithmetic of first_rising_root, which uses it). False when there is none.
+struct TrigRoot { double x, y, A2; };
+inline bool rising_root(double a, double b, double c, TrigRoot& root) {
+  const double A2 = a * a + b * b;
+  if (A2 <= 0.0 || c * c > A2) return false;
+  const double q = std::sqrt(A2 - c * c);
+  root = {a * c + b * q, b * c - a * q, A2};
+  return true;
+}
+// The angle of the direction (x, y) taken in (t_min, t_min + 2 pi] (t_min >= 0): first_rising_root's t.
+double angle_after(double x, double y, double t_min);
+
 // A monotone stand-in for the angle of the direction (x, y) over [0, 2 pi), in [0, 4): comparing two of
 // them orders the angles without inverse trigonometry.
 inline double pseudo_angle(double x, double y) {

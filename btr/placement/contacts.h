@@ -1,6 +1,7 @@
 #pragma once
 // The active contacts of a grain being placed and the first event along its path: the analytic engine's
 // (btr/placement/deposition.cpp) and the mesh placement's exact moves (btr/placement/mesh_exact_moves.cpp).
+#include <limits>
 #include <new>
 #include <type_traits>
 
@@ -70,7 +71,24 @@ struct Event {
   ArcDirection direction;  // on an arc, t's direction when the offer that set t knew it
   Contacts hits;
   int lift_off = -1;  // index in the active contacts of a support that unloads
+  // A root taken as the new event without its angle (offer_grains_on_arc: it lies before t by far more than tol):
+  // t is NaN until resolve() takes it from the root's direction (x, y) (angle_after), as an offer would have.
+  bool t_pending = false;
+  double pending_x = 0.0, pending_y = 0.0;
+  void offer_pending(const Obstacle& o, double x, double y, ArcDirection at) {
+    t = std::numeric_limits<double>::quiet_NaN();
+    t_pending = true, pending_x = x, pending_y = y;
+    direction = at;
+    hits.n = 0;
+    hits.overflow = false;
+    lift_off = -1;
+    hits.add(o);
+  }
+  void resolve() {
+    if (t_pending) t = angle_after(pending_x, pending_y, 0.0), t_pending = false;
+  }
   void offer(double t_new, const Obstacle& o, double tol, ArcDirection at = ArcDirection::unknown()) {
+    resolve();
     if (t_new < t - tol) {
       t = t_new;
       direction = at;

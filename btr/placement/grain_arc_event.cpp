@@ -3,6 +3,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <limits>
 
 #include "btr/placement/descent.h"
 #include "btr/placement/neighbour_grid.h"
@@ -42,11 +43,26 @@ void offer_grains_on_arc(const NeighbourGrid& grid, double r, double r_max, cons
       ev.offer(0.0, o, kTieT, kArcStart);
       return;
     }
-    if (screen_t != ev.t) screen_t = ev.t, screen = root_screen_after(ev.t, ev.direction, kTieT);
-    ArcDirection direction;
-    const double t = first_rising_root(-a, -b, K - R2, touching ? kSkipTangency : 0.0, ev.t + kTieT, screen,
-                                       &direction);
-    if (t >= 0.0) ev.offer(t, o, kTieT, direction);
+    if (!ev.t_pending && screen_t != ev.t) screen_t = ev.t, screen = root_screen_after(ev.t, ev.direction, kTieT);
+    // first_rising_root(-a, -b, K - R2, t_min, ev.t + kTieT, screen), its angle taken only when needed.
+    TrigRoot root;
+    if (!rising_root(-a, -b, K - R2, root)) return;
+    const double key = pseudo_angle(root.x, root.y);
+    if (screen < 5.0 && key > screen) return;
+    const ArcDirection direction{root.x / root.A2, root.y / root.A2};
+    const double t_min = touching ? kSkipTangency : 0.0;
+    // More than a margin before the event (screen less twice that) and after t_min in pseudo-angle: as the
+    // pseudo-angle grows no faster than the angle (and from 0 at t = 0), the root lies in (t_min, ev.t - kTieT),
+    // unwrapped, so an offer would make it the event. It is, its angle left to Event::resolve (the same atan2);
+    // only roots within the margins, where round-off could order them either way, take atan2 here.
+    if (screen < 5.0 && key < screen - 2.0 * kScreenMargin && key > t_min + kScreenMargin) {
+      ev.offer_pending(o, root.x, root.y, direction);
+      screen = key + kScreenMargin;
+      return;
+    }
+    ev.resolve();
+    const double t = angle_after(root.x, root.y, t_min);
+    if (t <= ev.t + kTieT) ev.offer(t, o, kTieT, direction);
   };
   // In two parts: first the grains near the arc's first stretch (1.5 radii of travel), where a rolling grain
   // usually meets the next one; only if no event is found there, those near the rest of the arc up to the
@@ -81,7 +97,10 @@ void offer_grains_on_arc(const NeighbourGrid& grid, double r, double r_max, cons
   const double first = std::min(arc.t_end, 1.5 * r / arc.rho);
   const ArcDirection split = first == arc.t_end ? direction_of(first, arc.end) : split_direction(first);
   visit_part(0.0, kArcStart, first, split);
-  if (ev.t > first) visit_part(first, split, ev.t, direction_of(ev.t, ev.direction));
+  // A pending event clearly before the split (first <= 1.5 rad unless it is the arc's end) needs no angle.
+  if (ev.t_pending && first != arc.t_end && pseudo_angle(split.c, split.s) - kScreenMargin <= screen)
+    ev.resolve();
+  if (!ev.t_pending && ev.t > first) visit_part(first, split, ev.t, direction_of(ev.t, ev.direction));
 }
 
 // A support lifts off where its load changes sign: gravity's part normal to the path is then parallel to the
@@ -91,7 +110,12 @@ void offer_lift_offs(const Contacts& supports, const CircleArc& arc, Event& ev) 
   // double), the same value at several times the cost.
   auto vertical_cross = [](const Vec3& p, const Vec3& q) { return p.x() * q.y() - p.y() * q.x(); };
   const Vec3 z = Vec3::UnitZ();
-  double lift_screen_t = ev.t, lift_screen = root_screen_after(ev.t, ev.direction, 0.0);  // again when a lift-off moves ev.t
+  // A pending event's t is taken only if a root passes its screen (most roots do not).
+  auto screen_of = [&ev] {
+    return ev.t_pending ? pseudo_angle(ev.direction.c, ev.direction.s) + kScreenMargin
+                        : root_screen_after(ev.t, ev.direction, 0.0);
+  };
+  double lift_screen_t = ev.t, lift_screen = screen_of();  // again when a lift-off moves ev.t
   for (int k = 0; k < 2; ++k) {
     const Obstacle& other = supports.item[1 - k];
     double a, b, c;
@@ -105,11 +129,14 @@ void offer_lift_offs(const Contacts& supports, const CircleArc& arc, Event& ev) 
       b = -vertical_cross(arc.u, other.c);
       c = 0.0;
     }
-    if (lift_screen_t != ev.t) lift_screen_t = ev.t, lift_screen = root_screen_after(ev.t, ev.direction, 0.0);
+    if (!ev.t_pending && lift_screen_t != ev.t) lift_screen_t = ev.t, lift_screen = screen_of();
     double roots[2];
     ArcDirection directions[2];
-    const int n = trig_roots(a, b, c, kTieT, ev.t, roots, lift_screen, directions);
+    const double t_max = ev.t_pending ? std::numeric_limits<double>::infinity() : ev.t;
+    const int n = trig_roots(a, b, c, kTieT, t_max, roots, lift_screen, directions);
     for (int m = 0; m < n; ++m) {
+      ev.resolve();
+      if (roots[m] > ev.t) break;  // trig_roots' own test had t been known (the roots ascend)
       // Load of support k just after the root.
       const double t = std::min(roots[m] + 1e-7, 0.5 * (roots[m] + arc.t_end));
       const Vec3 P = arc.at(t), T = arc.tangent(t);
@@ -130,6 +157,7 @@ Event first_grain_event(const NeighbourGrid& grid, double r, double r_max, const
   Event ev(arc.t_end, arc.end);
   offer_grains_on_arc(grid, r, r_max, supports, arc, arc.at(0.0), ev);
   if (supports.n == 2) offer_lift_offs(supports, arc, ev);
+  ev.resolve();
   return ev;
 }
 
