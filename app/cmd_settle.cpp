@@ -163,13 +163,8 @@ int run(const Options& o, const CLI::App& cmd) {
                                   {"simulated_seconds", r.simulated_time},
                                   {"stop_reason", r.stop_reason},
                                   {"output", "relax/relaxed.csv"}}));
-    const bool by_force = relax_scene.relax.stop_rule == "unbalanced-force";
-    const json not_at_rest = btr::relaxation_not_at_rest(
-        r.stop_reason, relax_scene.relax.stop_rule,
-        by_force ? relax_scene.relax.stop_unbalanced_force
-                 : relax_scene.relax.stop_rule == "displacement" ? relax_scene.relax.stop_displacement
-                                                                 : relax_scene.relax.stop_kinetic_ratio,
-        by_force ? r.final_unbalanced_force : std::nan(""), r.simulated_time, r.relaxed.grains, r.velocities, heap);
+    const json not_at_rest =
+        btr::relaxation_not_at_rest(r.relaxed.meta["relax"], r.relaxed.grains, r.velocities, heap);
     if (!not_at_rest.is_null()) {
       steps.back()["not_at_rest"] = not_at_rest;
       std::cerr << "btr settle: warning: " << not_at_rest["why"].get<std::string>() << " (settle.json, the relax step's "

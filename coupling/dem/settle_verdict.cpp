@@ -43,14 +43,17 @@ TargetVerdict settle_target_verdict(double btr_phi, double settled_phi, bool com
   return v;
 }
 
-nlohmann::json relaxation_not_at_rest(const std::string& stop_reason, const std::string& stop_rule, double threshold,
-                                      double final_value, double simulated_time, const Grains& grains,
+nlohmann::json relaxation_not_at_rest(const nlohmann::json& relax, const Grains& grains,
                                       const std::vector<Vec3>& velocities, bool heap) {
-  if (stop_reason != "max-time") return nullptr;
-  nlohmann::json record = {{"stop_rule", stop_rule},
-                           {"threshold", threshold},
-                           {"final_value", std::isfinite(final_value) ? nlohmann::json(final_value) : nlohmann::json()},
-                           {"simulated_seconds", simulated_time}};
+  if (relax.value("stop_reason", std::string()) != "max-time") return nullptr;
+  const std::string rule = relax.value("stop_rule", std::string());
+  const char* final_key = rule == "unbalanced-force" ? "final_unbalanced_force"
+                          : rule == "kinetic-energy" ? "final_kinetic_energy"
+                                                     : nullptr;  // no final displacement is recorded
+  const nlohmann::json final_value = final_key ? relax.value(final_key, nlohmann::json()) : nlohmann::json();
+  const double threshold = relax.value("stop_threshold", std::nan("")), time = relax.value("simulated_time", 0.0);
+  nlohmann::json record = {
+      {"stop_rule", rule}, {"threshold", threshold}, {"final_value", final_value}, {"simulated_seconds", time}};
   std::string fastest;
   if (!velocities.empty() && velocities.size() == grains.size()) {
     std::size_t k = 0;
@@ -60,8 +63,8 @@ nlohmann::json relaxation_not_at_rest(const std::string& stop_reason, const std:
     record["fastest_grain"] = {{"id", k + 1}, {"speed", speed}, {"x", {grains[k].x.x(), grains[k].x.y(), grains[k].x.z()}}};
     fastest = "; its fastest grain (id " + std::to_string(k + 1) + ") moved at " + g6(speed) + " m/s";
   }
-  record["why"] = "the relaxation ran to its max time (" + g6(simulated_time) + " s simulated) without its stop rule (" +
-                  stop_rule + " below " + g6(threshold) + (std::isfinite(final_value) ? ", at the end " + g6(final_value) : "") +
+  record["why"] = "the relaxation ran to its max time (" + g6(time) + " s simulated) without its stop rule (" + rule +
+                  " below " + g6(threshold) + (final_value.is_number() ? ", at the end " + g6(final_value.get<double>()) : "") +
                   "): the packing was still moving when it was written" + fastest +
                   (heap ? ". A heap whose toe rolls on the floor (no rolling resistance) has no rest state: its angle "
                           "follows the time it is given, as a pour's does (docs/settle/heaps/README.md)"

@@ -31,12 +31,12 @@ TargetVerdict settle_target_verdict(double btr_phi, double settled_phi, bool com
                                     double target, double standard_error,
                                     const nlohmann::json& calibration_coordination);
 
-// settle.json's relax.not_at_rest: the relaxation ran to its max time without its stop rule firing, so the
-// packing was still moving when it was written (a heap's toe without rolling resistance rolls out for as long as
-// it runs: docs/settle/heaps/README.md). Null when the rule fired. final_value: the rule's measure at the end (NaN if
-// the engine did not report it); velocities: each grain's at the end, in the order of grains (grain k has id k + 1).
-nlohmann::json relaxation_not_at_rest(const std::string& stop_reason, const std::string& stop_rule, double threshold,
-                                      double final_value, double simulated_time, const Grains& grains,
+// settle.json's not_at_rest (the relax step's): the relaxation ran to its max time without its stop rule firing, so
+// the packing was still moving when it was written (a heap's toe without rolling resistance rolls out for as long as
+// it runs: docs/settle/heaps/README.md). Null when the rule fired. relax: the relaxed packing's "relax" record (its
+// stop_reason, stop_rule, stop_threshold, simulated_time, final values); velocities: each grain's at the end, in the
+// order of grains (grain k has id k + 1).
+nlohmann::json relaxation_not_at_rest(const nlohmann::json& relax, const Grains& grains,
                                       const std::vector<Vec3>& velocities, bool heap);
 
 }  // namespace btr

@@ -55,21 +55,30 @@ TEST(SettleVerdict, ARelaxationThatRanToItsMaxTimeIsReportedWithItsFastestGrain)
                          {Vec3(0.0, 0.0, 0.0015), 0.0005}};
   // the second grain rolls at 5 mm/s (3-4-0), the others creep
   const std::vector<Vec3> v = {Vec3(1e-5, 0.0, 0.0), Vec3(0.003, -0.004, 0.0), Vec3(0.0, 0.0, -2e-4)};
-  const nlohmann::json r = relaxation_not_at_rest("max-time", "unbalanced-force", 1e-3, 0.0056, 1.0046, grains, v, true);
+  const nlohmann::json yade_heap = {{"stop_reason", "max-time"}, {"stop_rule", "unbalanced-force"},
+                                    {"stop_threshold", 1e-3},      {"final_unbalanced_force", 0.0056},
+                                    {"final_kinetic_energy", 4e-10}, {"simulated_time", 1.0046}};
+  const nlohmann::json r = relaxation_not_at_rest(yade_heap, grains, v, true);
   ASSERT_TRUE(r.is_object());
   EXPECT_EQ(r["fastest_grain"]["id"], 2);
   EXPECT_NEAR(r["fastest_grain"]["speed"].get<double>(), 0.005, 1e-15);
   EXPECT_EQ(r["fastest_grain"]["x"][1].get<double>(), 0.006);
-  EXPECT_EQ(r["final_value"].get<double>(), 0.0056);
+  EXPECT_EQ(r["final_value"].get<double>(), 0.0056) << "the rule's own measure, not the kinetic energy";
+  EXPECT_EQ(r["threshold"].get<double>(), 1e-3);
   const std::string why = r["why"];
   EXPECT_NE(why.find("heap"), std::string::npos) << why;
   EXPECT_NE(why.find("0.0056"), std::string::npos) << why;
 
   // a rule that fired is no record; a bed's record does not speak of heaps; no velocities, no fastest grain
-  EXPECT_TRUE(relaxation_not_at_rest("unbalanced-force", "unbalanced-force", 1e-3, 8e-4, 0.2, grains, v, true).is_null());
-  const nlohmann::json bed = relaxation_not_at_rest("max-time", "unbalanced-force", 1e-3, std::nan(""), 1.0, grains, {}, false);
+  nlohmann::json fired = yade_heap;
+  fired["stop_reason"] = "unbalanced-force";
+  EXPECT_TRUE(relaxation_not_at_rest(fired, grains, v, true).is_null());
+  nlohmann::json by_energy = yade_heap;
+  by_energy["stop_rule"] = "kinetic-energy";
+  by_energy.erase("final_unbalanced_force");
+  const nlohmann::json bed = relaxation_not_at_rest(by_energy, grains, {}, false);
   EXPECT_EQ(bed["why"].get<std::string>().find("heap"), std::string::npos);
-  EXPECT_TRUE(bed["final_value"].is_null());
+  EXPECT_EQ(bed["final_value"].get<double>(), 4e-10) << "the kinetic-energy rule's measure";
   EXPECT_FALSE(bed.contains("fastest_grain"));
 }
 
