@@ -15,9 +15,10 @@ void CircleArc::bounds(Vec3& lo, Vec3& hi) const {
   hi = p0.cwiseMax(p1);
   // Is the direction of (c, s) at an angle in (0, t_end) (t_end in [0, 2 pi])? Only signs are read, so
   // (c, s) need not be a unit vector: (u_k, v_k) itself, without the divisions by its length.
+  const bool half_turn = end_within_half_turn();
   auto inside = [&](double c, double s) {
     const double after_end = c * se - s * ce;  // > 0: (c, s) is before the end direction (within pi of it)
-    if (t_end <= M_PI) return s > 0.0 && after_end > 0.0;
+    if (half_turn) return s > 0.0 && after_end > 0.0;
     return s > 0.0 || after_end > 0.0;
   };
   for (int k = 0; k < 3; ++k) {
@@ -26,6 +27,15 @@ void CircleArc::bounds(Vec3& lo, Vec3& hi) const {
     if (inside(u[k], v[k])) hi[k] = std::max(hi[k], C[k] + rho * m);
     if (inside(-u[k], -v[k])) lo[k] = std::min(lo[k], C[k] - rho * m);
   }
+}
+
+bool CircleArc::end_within_half_turn() const {
+  if (!end_pending) return t_end <= M_PI;
+  // The angle is atan2(end_y, end_x), or that plus 2 pi when not positive: in (0, pi] for end_y > 0, clearly
+  // past pi for end_y clearly negative; within a hair of pi, as atan2 rounds it.
+  if (end_y > 0.0) return true;
+  if (end.s < -1e-9) return false;
+  return end_angle() <= M_PI;
 }
 
 // Roots of a cos t + b sin t = c without the amplitude's angle: with A^2 = a^2 + b^2 and q = sqrt(A^2 - c^2),

@@ -35,11 +35,19 @@ struct CircleArc {
   Vec3 C = Vec3::Zero();
   double rho = 0.0;
   Vec3 u = Vec3::UnitX(), v = Vec3::UnitY();  // orthonormal; P(0) = C + rho u, P'(0) along v
-  double t_end = 0.0;
+  double t_end = 0.0;  // NaN while end_pending: read it by end_angle()
   // The direction of t_end when the caller knows it (set_end). Code that sets t_end alone must leave it unknown.
   ArcDirection end = ArcDirection::unknown();
+  // An end set by set_end_towards whose angle is not taken yet: its direction's atan2 arguments.
+  bool end_pending = false;
+  double end_x = 0.0, end_y = 0.0;
 
-  void set_end(double t, ArcDirection direction) { t_end = t, end = direction; }
+  void set_end(double t, ArcDirection direction) { t_end = t, end = direction, end_pending = false; }
+  // The end at the angle of (x, y) taken in (0, 2 pi] (angle_after(x, y, 0)), only when something reads it
+  // (end_angle, Event::resolve); its direction is known at once.
+  void set_end_towards(double x, double y);
+  double end_angle() const;
+  bool end_within_half_turn() const;  // t_end <= pi
   Vec3 at(double t) const { return C + rho * (std::cos(t) * u + std::sin(t) * v); }
   Vec3 at(ArcDirection d) const { return C + rho * (d.c * u + d.s * v); }
   // The point at t, from its direction d when that is known.
@@ -71,6 +79,12 @@ inline bool rising_root(double a, double b, double c, TrigRoot& root) {
 }
 // The angle of the direction (x, y) taken in (t_min, t_min + 2 pi] (t_min >= 0): first_rising_root's t.
 double angle_after(double x, double y, double t_min);
+// atan2(y, x) > 0 without the call, for x and y finite or NaN (a unit vector's components): y > 0, or y = +0
+// with x negative or -0 (the angle pi).
+inline bool positive_angle(double x, double y) {
+  return x == x && (y > 0.0 || (y == 0.0 && !std::signbit(y) && std::signbit(x)));
+}
+inline double CircleArc::end_angle() const { return end_pending ? angle_after(end_x, end_y, 0.0) : t_end; }
 
 // A monotone stand-in for the angle of the direction (x, y) over [0, 2 pi), in [0, 4): comparing two of
 // them orders the angles without inverse trigonometry.
@@ -115,6 +129,15 @@ inline double root_screen(double t_max) {
 inline double root_screen_after(double t, ArcDirection d, double extra) {
   if (!d.known()) return root_screen(t + extra);
   return has_root_screen(t + extra) ? pseudo_angle(d.c, d.s) + kScreenMargin : 5.0;
+}
+
+inline void CircleArc::set_end_towards(double x, double y) {
+  end = ArcDirection::of(x, y);
+  end_x = x, end_y = y;
+  // A pending end's pseudo-angle stands for its angle in the root screens (Event::pending_screen); near angle 0,
+  // where the angle may wrap to 2 pi, it cannot, so the angle is taken at once.
+  end_pending = pseudo_angle(end.c, end.s) > kScreenMargin;
+  t_end = end_pending ? std::numeric_limits<double>::quiet_NaN() : angle_after(x, y, 0.0);
 }
 
 // All t in (t_min, t_max] with a cos t + b sin t = c, ascending; returns how many (0, 1 or 2).

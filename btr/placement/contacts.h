@@ -67,14 +67,24 @@ struct Contacts {
 // (800 bytes) at every fall and roll.
 struct Event {
   explicit Event(double t_end, ArcDirection end = ArcDirection::unknown()) : t(t_end), direction(end) {}
+  // The arc's end, pending as long as the arc's own angle is.
+  explicit Event(const CircleArc& arc) : t(arc.t_end), direction(arc.end) {
+    if (arc.end_pending) t_pending = true, pending_x = arc.end_x, pending_y = arc.end_y;
+  }
   double t;
   ArcDirection direction;  // on an arc, t's direction when the offer that set t knew it
   Contacts hits;
   int lift_off = -1;  // index in the active contacts of a support that unloads
-  // A root taken as the new event without its angle (offer_grains_on_arc: it lies before t by far more than tol):
-  // t is NaN until resolve() takes it from the root's direction (x, y) (angle_after), as an offer would have.
+  // A root taken as the new event without its angle (offer_grains_on_arc: it lies before t by far more than tol),
+  // or an arc's end whose angle is pending (CircleArc::set_end_towards): t is NaN until resolve() takes it from
+  // the direction (x, y) (angle_after), as an offer or the arc would have.
   bool t_pending = false;
   double pending_x = 0.0, pending_y = 0.0;
+  // The root screen of a pending t (root_screen_after without the angle): a pending t's pseudo-angle is more
+  // than the margin past 0, so it cannot have wrapped to 2 pi and stands for t.
+  double pending_screen() const { return pseudo_angle(direction.c, direction.s) + kScreenMargin; }
+  // The largest root an offer can take or tie with: t + tol, or while t is pending any (offer resolves t first).
+  double reach(double tol) const { return t_pending ? std::numeric_limits<double>::infinity() : t + tol; }
   void offer_pending(const Obstacle& o, double x, double y, ArcDirection at) {
     t = std::numeric_limits<double>::quiet_NaN();
     t_pending = true, pending_x = x, pending_y = y;

@@ -173,7 +173,7 @@ void Deposition::Impl::fall(Vec3& x, double r, Contacts& active, const std::vect
 void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const CircleArc& arc,
                                    const std::vector<Obstacle>& walls) {
   const double t_tol = 1e-13;
-  Event ev(arc.t_end, arc.end);
+  Event ev(arc);
 
   auto offer_plane = [&](const Obstacle& o) {
     if (active.has(o.key)) return;
@@ -184,13 +184,14 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
     const bool touching = g0 + a <= 1e-9 * r;
     if (touching && b < -kApproach * arc.rho) { ev.offer(0.0, o, t_tol, kArcStart); return; }
     ArcDirection direction;
-    const double t = first_rising_root(-a, -b, g0, touching ? kSkipTangency : 0.0, ev.t + t_tol, 5.0, &direction);
+    const double t = first_rising_root(-a, -b, g0, touching ? kSkipTangency : 0.0, ev.reach(t_tol), 5.0, &direction);
     if (t >= 0.0) ev.offer(t, o, t_tol, direction);
   };
   // The vertical cylinder and a drum (an arc out of the planes y = const): the squared distance from the
   // axis is of degree 2 in cos t, sin t; its first rise through R^2 by branch and bound.
   auto offer_tube = [&](const Obstacle& o, int axis) {
     if (active.has(o.key)) return;
+    ev.resolve();  // the exit's search is bounded by the event
     const double t = first_tube_exit(arc, o.kind == Obstacle::Kind::Drum ? o.c : Vec3::Zero(), axis, o.R, ev.t + t_tol);
     if (t >= 0.0) ev.offer(t, o, t_tol);
   };
@@ -220,7 +221,7 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
     const bool touching = K + a - R2 >= -1e-9 * R2;  // a start a hair beyond the wall included, as for planes
     if (touching && b > 2.0 * kApproach * arc.rho * o.R) { ev.offer(0.0, o, t_tol, kArcStart); return; }
     ArcDirection direction;
-    const double t = first_rising_root(a, b, R2 - K, touching ? kSkipTangency : 0.0, ev.t + t_tol, 5.0, &direction);
+    const double t = first_rising_root(a, b, R2 - K, touching ? kSkipTangency : 0.0, ev.reach(t_tol), 5.0, &direction);
     if (t >= 0.0) ev.offer(t, o, t_tol, direction);
   };
   // In a drum the floor only touches the drum's lowest line, where the drum wall is met first.
@@ -663,8 +664,8 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
       arc.rho = p.R;
       arc.u = (x - p.c).normalized();
       arc.v = (d - d.dot(arc.u) * arc.u).normalized();
-      const double equator = std::atan2(arc.u.z(), -arc.v.z());  // the support's equator
-      if (equator > 0.0) arc.set_end(equator, ArcDirection::of(-arc.v.z(), arc.u.z()));
+      // The support's equator, at the angle of (-v_z, u_z) when that is positive.
+      if (positive_angle(-arc.v.z(), arc.u.z())) arc.set_end_towards(-arc.v.z(), arc.u.z());
       else arc.set_end(0.0, kArcStart);
     } else if (drums == 0 && ((spheres == 2 && planes == 0 && cylinders == 0) ||
                               (spheres == 1 && planes == 1 && cylinders == 0))) {
@@ -687,9 +688,7 @@ const Grain& Deposition::Impl::place(const Drop& drop) {
       arc.u = radial.normalized();
       arc.v = axis.cross(arc.u);
       if (arc.v.dot(d) < 0.0) arc.v = -arc.v;
-      double t_low = std::atan2(-arc.v.z(), -arc.u.z());
-      if (t_low <= 0.0) t_low += kTwoPi;
-      arc.set_end(t_low, arc.lowest_direction());  // the lowest point of the circle
+      arc.set_end_towards(-arc.u.z(), -arc.v.z());  // the lowest point of the circle
     } else if (spheres == 1 && cylinders == 1 && planes == 0 && drums == 0) {
       if (roll_along_cylinder(x, r, active, si, ci, d, walls)) stable = true;
       continue;

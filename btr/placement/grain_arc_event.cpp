@@ -21,11 +21,37 @@ ArcDirection split_direction(double t) {
   return d;
 }
 
+// Does the arc end by t > 0 (std::min(arc.t_end, t) is t_end)? If not, split is t's direction (split_direction).
+// A pending end is compared in pseudo-angle where the two lie more than a margin apart, as roots are with the
+// event (the pseudo-angle grows no faster than the angle); its angle is taken otherwise.
+bool ends_by(const CircleArc& arc, double t, ArcDirection& split) {
+  if (arc.end_pending && t >= kTwoPi) return true;  // t_end <= 2 pi
+  if (arc.end_pending && has_root_screen(t)) {
+    split = split_direction(t);
+    const double end = pseudo_angle(arc.end.c, arc.end.s), at = pseudo_angle(split.c, split.s);
+    if (end < at - kScreenMargin) return true;
+    if (end > at + kScreenMargin) return false;
+  }
+  if (!(t < arc.end_angle())) return true;
+  split = split_direction(t);
+  return false;
+}
+
+// The arc from t0 to t1 (directions d0 and d1, known), rotated to start at t0: its end relative to that.
+CircleArc part_between(const CircleArc& arc, double t0, ArcDirection d0, double t1, ArcDirection d1) {
+  CircleArc part = arc;
+  part.u = d0.c * arc.u + d0.s * arc.v;
+  part.v = d0.c * arc.v - d0.s * arc.u;
+  part.set_end(t1 - t0, {d1.c * d0.c + d1.s * d0.s, d1.s * d0.c - d1.c * d0.s});
+  return part;
+}
+
 }  // namespace
 
 void offer_grains_on_arc(const NeighbourGrid& grid, double r, double r_max, const Contacts& supports,
                          const CircleArc& arc, const Vec3& start, Event& ev) {
-  double screen_t = -1.0, screen = 5.0;  // root_screen of the event so far, for the parameter screen_t
+  // root_screen of the event so far, for the parameter screen_t (a pending event's: pending_screen)
+  double screen_t = -1.0, screen = ev.t_pending ? ev.pending_screen() : 5.0;
   auto offer_sphere = [&](const Obstacle& o) {
     const Vec3 w = arc.C - o.c;
     const double R2 = o.R * o.R;
@@ -69,18 +95,11 @@ void offer_grains_on_arc(const NeighbourGrid& grid, double r, double r_max, cons
   // event so far. An obstacle met before the event found lies near the part of the arc before it, so the
   // first visit alone suffices when the event is in its part.
   const Vec3 reach = Vec3::Constant(r + r_max);
-  // The part from t0 to t1 (directions d0 and d1, known): rotated to start at t0, its end relative to that.
-  auto visit_part = [&](double t0, ArcDirection d0, double t1, ArcDirection d1) {
-    CircleArc part = arc;
-    if (t0 != 0.0) {
-      part.u = d0.c * arc.u + d0.s * arc.v;
-      part.v = d0.c * arc.v - d0.s * arc.u;
-      d1 = {d1.c * d0.c + d1.s * d0.s, d1.s * d0.c - d1.c * d0.s};
-    }
-    part.set_end(t1 - t0, d1);
+  // The grains near a part of the arc (from_start: the part that starts where the arc does).
+  auto visit_part = [&](const CircleArc& part, bool from_start) {
     Vec3 plo, phi;
     part.bounds(plo, phi);
-    if (t0 == 0.0) plo = plo.cwiseMin(start), phi = phi.cwiseMax(start);  // the start exactly, whatever round-off
+    if (from_start) plo = plo.cwiseMin(start), phi = phi.cwiseMax(start);  // the start exactly, whatever round-off
     // The box and r copied into the visitor: read from it directly at every entry (offer_sphere's stores
     // may alias them as far as the compiler knows, so they are reloaded, but not through a pointer).
     grid.visit_box(plo - reach, phi + reach, [plo, phi, r, &offer_sphere](std::int32_t i, const Vec3& c, double radius, int image) {
@@ -94,13 +113,19 @@ void offer_grains_on_arc(const NeighbourGrid& grid, double r, double r_max, cons
       offer_sphere(o);
     });
   };
-  const double first = std::min(arc.t_end, 1.5 * r / arc.rho);
-  const ArcDirection split = first == arc.t_end ? direction_of(first, arc.end) : split_direction(first);
-  visit_part(0.0, kArcStart, first, split);
-  // A pending event clearly before the split (first <= 1.5 rad unless it is the arc's end) needs no angle.
-  if (ev.t_pending && first != arc.t_end && pseudo_angle(split.c, split.s) - kScreenMargin <= screen)
-    ev.resolve();
-  if (!ev.t_pending && ev.t > first) visit_part(first, split, ev.t, direction_of(ev.t, ev.direction));
+  const double first = 1.5 * r / arc.rho;
+  ArcDirection split;
+  if (ends_by(arc, first, split)) {
+    visit_part(arc, true);
+    return;
+  }
+  CircleArc part = arc;
+  part.set_end(first, split);
+  visit_part(part, true);
+  // A pending event clearly before the split (first <= 1.5 rad here) needs no angle.
+  if (ev.t_pending && pseudo_angle(split.c, split.s) - kScreenMargin <= screen) ev.resolve();
+  if (!ev.t_pending && ev.t > first)
+    visit_part(part_between(arc, first, split, ev.t, direction_of(ev.t, ev.direction)), false);
 }
 
 // A support lifts off where its load changes sign: gravity's part normal to the path is then parallel to the
@@ -111,10 +136,7 @@ void offer_lift_offs(const Contacts& supports, const CircleArc& arc, Event& ev) 
   auto vertical_cross = [](const Vec3& p, const Vec3& q) { return p.x() * q.y() - p.y() * q.x(); };
   const Vec3 z = Vec3::UnitZ();
   // A pending event's t is taken only if a root passes its screen (most roots do not).
-  auto screen_of = [&ev] {
-    return ev.t_pending ? pseudo_angle(ev.direction.c, ev.direction.s) + kScreenMargin
-                        : root_screen_after(ev.t, ev.direction, 0.0);
-  };
+  auto screen_of = [&ev] { return ev.t_pending ? ev.pending_screen() : root_screen_after(ev.t, ev.direction, 0.0); };
   double lift_screen_t = ev.t, lift_screen = screen_of();  // again when a lift-off moves ev.t
   for (int k = 0; k < 2; ++k) {
     const Obstacle& other = supports.item[1 - k];
@@ -137,8 +159,10 @@ void offer_lift_offs(const Contacts& supports, const CircleArc& arc, Event& ev) 
     for (int m = 0; m < n; ++m) {
       ev.resolve();
       if (roots[m] > ev.t) break;  // trig_roots' own test had t been known (the roots ascend)
-      // Load of support k just after the root.
-      const double t = std::min(roots[m] + 1e-7, 0.5 * (roots[m] + arc.t_end));
+      // Load of support k just after the root: 1e-7 past it, or half way to the arc's end if that is nearer (not
+      // when the event, at most the end, lies far beyond: the end's angle is then not needed).
+      const double past = roots[m] + 1e-7;
+      const double t = ev.t - roots[m] > 1e-6 ? past : std::min(past, 0.5 * (roots[m] + arc.end_angle()));
       const Vec3 P = arc.at(t), T = arc.tangent(t);
       const Vec3 g_perp = z - z.dot(T) * T;
       if (unloads(g_perp, supports.item[k].normal(P), other.normal(P)) && roots[m] < ev.t - kTieT) {
@@ -154,7 +178,7 @@ void offer_lift_offs(const Contacts& supports, const CircleArc& arc, Event& ev) 
 
 Event first_grain_event(const NeighbourGrid& grid, double r, double r_max, const Contacts& supports,
                         const CircleArc& arc) {
-  Event ev(arc.t_end, arc.end);
+  Event ev(arc);
   offer_grains_on_arc(grid, r, r_max, supports, arc, arc.at(0.0), ev);
   if (supports.n == 2) offer_lift_offs(supports, arc, ev);
   ev.resolve();
