@@ -38,9 +38,9 @@ struct CircleArc {
   double t_end = 0.0;  // NaN while end_pending: read it by end_angle()
   // The direction of t_end when the caller knows it (set_end). Code that sets t_end alone must leave it unknown.
   ArcDirection end = ArcDirection::unknown();
-  // An end set by set_end_towards whose angle is not taken yet: its direction's atan2 arguments.
+  // An end set by set_end_towards whose angle is not taken yet: its direction's atan2 arguments and pseudo-angle.
   bool end_pending = false;
-  double end_x = 0.0, end_y = 0.0;
+  double end_x = 0.0, end_y = 0.0, end_key = 0.0;
 
   void set_end(double t, ArcDirection direction) { t_end = t, end = direction, end_pending = false; }
   // The end at the angle of (x, y) taken in (0, 2 pi] (angle_after(x, y, 0)), only when something reads it
@@ -136,7 +136,8 @@ inline void CircleArc::set_end_towards(double x, double y) {
   end_x = x, end_y = y;
   // A pending end's pseudo-angle stands for its angle in the root screens (Event::pending_screen); near angle 0,
   // where the angle may wrap to 2 pi, it cannot, so the angle is taken at once.
-  end_pending = pseudo_angle(end.c, end.s) > kScreenMargin;
+  end_key = pseudo_angle(end.c, end.s);
+  end_pending = end_key > kScreenMargin;
   t_end = end_pending ? std::numeric_limits<double>::quiet_NaN() : angle_after(x, y, 0.0);
 }
 

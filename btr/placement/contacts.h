@@ -69,7 +69,7 @@ struct Event {
   explicit Event(double t_end, ArcDirection end = ArcDirection::unknown()) : t(t_end), direction(end) {}
   // The arc's end, pending as long as the arc's own angle is.
   explicit Event(const CircleArc& arc) : t(arc.t_end), direction(arc.end) {
-    if (arc.end_pending) t_pending = true, pending_x = arc.end_x, pending_y = arc.end_y;
+    if (arc.end_pending) t_pending = true, pending_x = arc.end_x, pending_y = arc.end_y, pending_key = arc.end_key;
   }
   double t;
   ArcDirection direction;  // on an arc, t's direction when the offer that set t knew it
@@ -79,15 +79,15 @@ struct Event {
   // or an arc's end whose angle is pending (CircleArc::set_end_towards): t is NaN until resolve() takes it from
   // the direction (x, y) (angle_after), as an offer or the arc would have.
   bool t_pending = false;
-  double pending_x = 0.0, pending_y = 0.0;
+  double pending_x = 0.0, pending_y = 0.0, pending_key = 0.0;  // pending_key: the direction's pseudo-angle
   // The root screen of a pending t (root_screen_after without the angle): a pending t's pseudo-angle is more
   // than the margin past 0, so it cannot have wrapped to 2 pi and stands for t.
-  double pending_screen() const { return pseudo_angle(direction.c, direction.s) + kScreenMargin; }
+  double pending_screen() const { return pending_key + kScreenMargin; }
   // The largest root an offer can take or tie with: t + tol, or while t is pending any (offer resolves t first).
   double reach(double tol) const { return t_pending ? std::numeric_limits<double>::infinity() : t + tol; }
-  void offer_pending(const Obstacle& o, double x, double y, ArcDirection at) {
+  void offer_pending(const Obstacle& o, double x, double y, double key, ArcDirection at) {
     t = std::numeric_limits<double>::quiet_NaN();
-    t_pending = true, pending_x = x, pending_y = y;
+    t_pending = true, pending_x = x, pending_y = y, pending_key = key;
     direction = at;
     hits.n = 0;
     hits.overflow = false;

@@ -28,7 +28,7 @@ bool ends_by(const CircleArc& arc, double t, ArcDirection& split) {
   if (arc.end_pending && t >= kTwoPi) return true;  // t_end <= 2 pi
   if (arc.end_pending && has_root_screen(t)) {
     split = split_direction(t);
-    const double end = pseudo_angle(arc.end.c, arc.end.s), at = pseudo_angle(split.c, split.s);
+    const double end = arc.end_key, at = pseudo_angle(split.c, split.s);
     if (end < at - kScreenMargin) return true;
     if (end > at + kScreenMargin) return false;
   }
@@ -82,8 +82,8 @@ void offer_grains_on_arc(const NeighbourGrid& grid, double r, double r_max, cons
     // unwrapped, so an offer would make it the event. It is, its angle left to Event::resolve (the same atan2);
     // only roots within the margins, where round-off could order them either way, take atan2 here.
     if (screen < 5.0 && key < screen - 2.0 * kScreenMargin && key > t_min + kScreenMargin) {
-      ev.offer_pending(o, root.x, root.y, direction);
-      screen = key + kScreenMargin;
+      ev.offer_pending(o, root.x, root.y, key, direction);
+      screen = ev.pending_screen();
       return;
     }
     ev.resolve();
