@@ -21,7 +21,8 @@ inline constexpr const char* kCompactionDampingFix = "btr_compaction_damping";
 double liggghts_compaction_drag_rate(const Grains& grains, const Scene& scene, double damping);
 
 // "fix kCompactionDampingFix all addforce ..." with its three atom-style variables (and comment): the drag of
-// liggghts_compaction_drag_rate. As for liggghts_local_damping_fix, no run after it may be "pre no".
+// liggghts_compaction_drag_rate. The first run after it must set up (a `run 0`); the checks after that run
+// "pre no" (its variables are found once, at that set-up).
 std::string liggghts_compaction_drag_fix(const Grains& grains, const Scene& scene, double damping);
 
 // The per-grain volume (area in 2D) in the window, compute btr_bulk_volume and variable btr_phi. Needs

@@ -138,7 +138,16 @@ TEST(TargetPhi, LiggghtsScriptRunsTheCompactionBeforeTheStopRule) {
   EXPECT_LT(stop, loop);
   EXPECT_LT(in.find("fix btr_compaction_damping all addforce v_btr_drag_x v_btr_drag_y v_btr_drag_z"),
             in.find("label btr_compact_1"));
-  EXPECT_EQ(in.find(" pre no"), std::string::npos) << "the drag is an addforce too: every run sets up";
+  // The compaction's checks run without set-ups (each would damp the collapse), after one set-up per block.
+  const std::size_t block = in.find("label btr_compact_1");
+  EXPECT_NE(in.rfind("run 0 post no", block), std::string::npos) << "the drag's variables need one set-up";
+  EXPECT_LT(in.rfind("fix btr_compaction_damping", block), in.rfind("run 0 post no", block));
+  const std::size_t check = in.find("run ", block);
+  const std::string no_setup = "run 50 pre no post no\n";
+  EXPECT_EQ(in.compare(check, no_setup.size(), no_setup), 0) << in.substr(check, 40);
+  const std::size_t second_block = in.find("label btr_compact_2");
+  ASSERT_NE(second_block, std::string::npos) << in;
+  EXPECT_LT(second, in.rfind("run 0 post no", second_block)) << "the second friction scale is set up before its checks";
   // The settle's damping is YADE's local law (fix addforce of atom-style variables), and the runs after it set up.
   const std::size_t local = in.find("fix btr_damping all addforce v_btr_local_x v_btr_local_y v_btr_local_z");
   ASSERT_NE(local, std::string::npos) << in;
