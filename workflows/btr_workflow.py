@@ -191,6 +191,9 @@ def main(argv=None) -> int:
     sm.add_argument("--reuse-settles", action="store_true",
                     help="reuse a btr settle already finished in OUT/runs/ROW/settle from the same scene and engine")
     sm.add_argument("--pours-only", action="store_true", help="the reference pours alone (no btr settle)")
+    sm.add_argument("--settle-seeds", type=int, default=1,
+                    help="settle each bed row at seeds 1..N (default 1): one settle's own seed-to-seed scatter beside "
+                         "the pours' floor, in runs/ROW/settle_seedS")
 
     dv = sub.add_parser("dynamic-vs-dem", help="dynamic BTR (btr drum, btr shake) against DEM (the same commands "
                                                "with --engine): drum segregation, Brazil nut, cost (docs/dynamic_vs_dem)")
@@ -331,7 +334,7 @@ def main(argv=None) -> int:
                 raise InputError(f"--rows: {e}") from None
             run_settle_matrix(args.out, args.count, args.depth, args.heap_count, args.yade_count, args.engine,
                               args.ref_seeds, args.np, args.margin, args.reuse_pours, args.pours_only, only, progress,
-                              reuse_settles=args.reuse_settles)
+                              reuse_settles=args.reuse_settles, settle_seeds=args.settle_seeds)
         elif args.command == "dynamic-vs-dem":
             from btrdem.studies.dynamic_vs_dem import run_dynamic_vs_dem
             try:

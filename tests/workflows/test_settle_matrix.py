@@ -83,17 +83,19 @@ def test_judge_and_cost_ratio_by_hand():
     assert settle_report.cost_ratio(None, [50.0]) is None
 
 
-def fake_settle_command(btr, record, calls=None):
-    """run_command for `btr settle`: a heap scene is refused (exit 2, reason on stderr); a bed gets a BTR deposit of
-    seed 9 as its settled packing OUTDIR/NAME.csv and settle.json = record (with the scene's name). Other commands
-    run for real. calls, a list, gets each settled scene's name."""
+def fake_settle_command(btr, record, calls=None, failing_seed=None):
+    """run_command for `btr settle`: a heap scene is refused (exit 2, reason on stderr), and so is failing_seed (exit
+    5); a bed at --seed S gets a BTR deposit of seed 8 + S as its settled packing OUTDIR/NAME.csv and settle.json =
+    record (with the scene's name and seed). Other commands run for real. calls, a list, gets each settled scene's
+    name (with "@S" for a seed other than 1)."""
     real = btr_cli.run_command
 
     def run(argv, cwd, label, **kw):
         if argv[1] != "settle":
             return real(argv, cwd, label, **kw)
+        seed = int(argv[argv.index("--seed") + 1]) if "--seed" in argv else 1
         if calls is not None:
-            calls.append(Path(argv[2]).stem)
+            calls.append(Path(argv[2]).stem + ("" if seed == 1 else f"@{seed}"))
         scene = argv[2]
         err = Path(cwd) / f"{label}.stderr"
         out = Path(cwd) / f"{label}.stdout"
@@ -102,8 +104,11 @@ def fake_settle_command(btr, record, calls=None):
         if "heap" in name:
             err.write_text(f"{scene}: btr settle: a point source on an open floor (a heap) is refused for now\n")
             return {"returncode": 2, "wall_seconds": 0.01, "cpu_seconds": 0.01, "stdout": str(out), "stderr": str(err)}
-        btr_cli.deposit(btr, scene, cwd, name, seed=9, progress=lambda m: None)
-        (Path(cwd) / "settle.json").write_text(json.dumps(dict(record, scene_name=name, engine="liggghts", seed=1)))
+        if seed == failing_seed:
+            err.write_text("btr settle: the engine failed (relax_failure.json)\n")
+            return {"returncode": 5, "wall_seconds": 0.01, "cpu_seconds": 0.01, "stdout": str(out), "stderr": str(err)}
+        btr_cli.deposit(btr, scene, cwd, name, seed=8 + seed, progress=lambda m: None)
+        (Path(cwd) / "settle.json").write_text(json.dumps(dict(record, scene_name=name, engine="liggghts", seed=seed)))
         err.write_text("")
         return {"returncode": 0, "wall_seconds": 0.5, "cpu_seconds": 0.4, "stdout": str(out), "stderr": str(err)}
     return run
@@ -165,6 +170,55 @@ def test_refused_heap_is_a_failed_row_and_the_bed_is_judged(tmp_path, btr_binary
     settle_matrix.run_settle_matrix(out, count=400, depth=0.006, margin=1.0, only=["bed_mu0.5"],
                                     progress=lambda m: None, reuse_settles=True)
     assert settle_calls == ["bed_mu0.5", "heap_open_floor", "heap_open_floor", "bed_mu0.5"]
+
+
+def test_settle_seeds_give_each_seeds_verdict_and_their_spread(tmp_path, btr_binary, monkeypatch):
+    monkeypatch.setenv("BTR_BINARY", btr_binary)
+    record = {"cpu_seconds": 3.0, "wall_seconds": 4.0, "steps": [], "chosen": {"target_phi": {"value": 0.6}}}
+    calls = []
+    monkeypatch.setattr(btr_cli, "run_command", fake_settle_command(btr_binary, record, calls, failing_seed=4))
+
+    def fake_pour(scene, folder, seed, engine, ranks, reuse, progress):
+        dep = btr_cli.deposit(btr_binary, scene, folder, "poured", seed=seed, progress=progress)
+        return {"packing": dep["csv"], "record_cpu_seconds": 10.0, "wall_seconds": 1.0,
+                "stop_reason": "kinetic-energy"}
+    monkeypatch.setattr(settle_matrix, "reference_pour", fake_pour)
+    out = tmp_path / "matrix"
+    res = settle_matrix.run_settle_matrix(out, count=400, depth=0.006, margin=1.0, only=["bed_mu0.5"],
+                                          progress=lambda m: None, settle_seeds=4)
+    row = res["rows"][0]
+    assert row["status"] == "ok", row["reason"]
+    assert calls == ["bed_mu0.5", "bed_mu0.5@2", "bed_mu0.5@3", "bed_mu0.5@4"]
+    entries = row["settle_seeds"]["entries"]
+    assert [e["seed"] for e in entries] == [1, 2, 3, 4]
+    assert [e["status"] for e in entries] == ["ok", "ok", "ok", "fail"]
+    assert "status 5" in entries[3]["reason"]
+    # each finished seed's packing measured independently: its own folder's CSV, the pours' mean and floor
+    runs = out / "runs" / "bed_mu0.5"
+    folders = [runs / "settle", runs / "settle_seed2", runs / "settle_seed3"]
+    settled = [measures.measure(f / "bed_mu0.5.csv", 1.0) for f in folders]
+    refs = [measures.measure(runs / f"pour_seed{s}" / "poured.csv", 1.0) for s in (1, 2, 3)]
+    summary = row["settle_seeds"]["summary"]
+    assert summary["seeds"] == 4 and summary["finished"] == 3
+    for key, get in (("packing_fraction", measures.packing_fraction), ("coordination", measures.coordination)):
+        vals, pours = [get(m) for m in settled], [get(m) for m in refs]
+        assert len(set(vals)) == 3  # three different packings
+        assert summary[key]["mean"] == pytest.approx(np.mean(vals), rel=1e-12)
+        assert summary[key]["sd"] == pytest.approx(np.std(vals, ddof=1), rel=1e-9)
+        assert summary[key]["mean_error_over_floor"] == pytest.approx(
+            (np.mean(vals) - np.mean(pours)) / np.std(pours, ddof=1), rel=1e-9)
+        reach = 2 * math.sqrt(4 / 3) * np.std(pours, ddof=1)
+        assert summary[key]["within"] == sum(abs(v - np.mean(pours)) <= reach for v in vals)
+        assert summary[key]["of"] == 3
+    report = (out / "report.md").read_text()
+    assert "across its seeds" in report and "seed 4 failed" in report
+    # again with reuse: the three finished seeds are taken as they are, the failed one runs again
+    again = settle_matrix.run_settle_matrix(out, count=400, depth=0.006, margin=1.0, only=["bed_mu0.5"],
+                                            progress=lambda m: None, settle_seeds=4, reuse_settles=True)
+    assert calls[4:] == ["bed_mu0.5@4"]
+    assert again["rows"][0]["settle_seeds"]["summary"] == summary
+    with pytest.raises(btr_cli.StepFailed, match="--settle-seeds"):
+        settle_matrix.run_settle_matrix(out, only=["bed_mu0.5"], progress=lambda m: None, settle_seeds=0)
 
 
 def test_settle_method_in_error_vs_runtime(tmp_path, btr_binary, monkeypatch):

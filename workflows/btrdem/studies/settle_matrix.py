@@ -6,7 +6,9 @@ Each bed row: `ref_seeds` reference pours of the row's scene (`btr pour SCENE --
 already finished in its folder is reused with reuse_pours), their mean and floor (seed-to-seed std) in packing
 fraction, coordination, g(r) and segregation index (error_runtime.measures_of / reference_stats), then
 `btr settle SCENE --seed 1` and its error per measure in units of the floor (settle_report.judge) and its cost
-ratio. A heap row runs settle first: a refused scene (exit 2) is a failed row with btr's reason, and no pour is
+ratio; with settle_seeds N, also seeds 2..N of each bed row's settle, each judged the same way, and their mean
+and seed-to-seed spread beside the pours' (one settle's own scatter; a failed seed is an entry with its reason).
+A heap row runs settle first: a refused scene (exit 2) is a failed row with btr's reason, and no pour is
 run for it; a heap that settles is judged by the heap angle. settle never sees the pours' numbers.
 
 Every row is a case of the run record: a failure is a row with its reason and the study goes on. report.md,
@@ -30,16 +32,20 @@ from .settle_rows import (BED_BASE, DEFAULT_COUNT, DEFAULT_DEPTH, DEFAULT_HEAP_C
 def run_settle_matrix(outdir, count: int = DEFAULT_COUNT, depth: float = DEFAULT_DEPTH,
                       heap_count: int = DEFAULT_HEAP_COUNT, yade_count: int = 0, engine: str = "liggghts",
                       ref_seeds: int = 3, ranks: int = 1, margin: float | None = None, reuse_pours: bool = False,
-                      pours_only: bool = False, only=None, progress=print, reuse_settles: bool = False) -> dict:
+                      pours_only: bool = False, only=None, progress=print, reuse_settles: bool = False,
+                      settle_seeds: int = 1) -> dict:
     if ref_seeds < 3:
         raise StepFailed(f"settle-matrix: --ref-seeds: expected at least 3 (the seed-to-seed spread is the floor), "
                          f"got {ref_seeds}")
+    if settle_seeds < 1:
+        raise StepFailed(f"settle-matrix: --settle-seeds: expected at least 1, got {settle_seeds}")
     btr = find_btr()
     outdir = Path(outdir).absolute()
     specs = matrix_rows(count, heap_count, yade_count, only)
     settings = {"count": count, "depth": depth, "heap_count": heap_count, "yade_count": yade_count, "engine": engine,
                 "ref_seeds": ref_seeds, "np": ranks, "margin": margin, "reuse_pours": reuse_pours,
-                "reuse_settles": reuse_settles, "pours_only": pours_only, "rows": [s["name"] for s in specs]}
+                "reuse_settles": reuse_settles, "pours_only": pours_only, "settle_seeds": settle_seeds,
+                "rows": [s["name"] for s in specs]}
     rec = RunRecord(outdir, "settle-matrix", inputs=[BED_BASE, *HEAP_BASES.values()], btr=btr, progress=progress,
                     settings=settings)
     command = " ".join(["/usr/bin/python3"] + [str(a) for a in rec.data["command"][1:]])
@@ -92,6 +98,9 @@ def run_settle_matrix(outdir, count: int = DEFAULT_COUNT, depth: float = DEFAULT
             if settled is None:
                 settled = settle_run(btr, scene, folder / "settle", eng, ranks, reuse_settles, progress)
             row["settle"] = judged_settle(settled, row["reference"], margin, ref_seeds)
+            if spec["kind"] != "heap" and settle_seeds > 1:
+                row["settle_seeds"] = other_seeds(btr, scene, folder, eng, ranks, reuse_settles, progress, row,
+                                                  margin, ref_seeds, settle_seeds)
     rec.finish({"rows": len(rows), "ok": sum(r["status"] == "ok" for r in rows)})
     return write(rows)
 
@@ -107,17 +116,38 @@ def reference_pour(scene: str, folder: Path, seed: int, engine: str, ranks: int,
     return dict(s, record_cpu_seconds=read_json(folder / "pour.json").get("cpu_seconds"))
 
 
-def settle_run(btr: str, scene: str, folder: Path, engine: str, ranks: int, reuse: bool, progress) -> dict:
-    """`btr settle SCENE --seed 1` (btr_cli.settle); StepFailed with btr's reason (exit 2: a refused scene) unless it
-    wrote its packing. With reuse, a settle that finished in folder from the same scene text and the same btr program
-    (both kept beside it in settled_by.json) with the same engine is taken as it is, with its recorded times."""
+def other_seeds(btr: str, scene: str, folder: Path, engine: str, ranks: int, reuse: bool, progress, row: dict,
+                margin, ref_seeds: int, settle_seeds: int) -> dict:
+    """Seeds 2..settle_seeds of the row's settle (folder/settle_seedS), each judged as seed 1 is, and
+    settle_report.seed_summary of all of them (seed 1: the row's settle)."""
+    s1 = row["settle"]
+    entries = [{"seed": 1, "status": "ok", "values": s1["values"], "judged": s1["judged"],
+                "cpu_seconds": s1["cpu_seconds"], "target_phi": (s1.get("target_phi") or {}).get("value")}]
+    for seed in range(2, settle_seeds + 1):
+        try:
+            res = settle_run(btr, scene, folder / f"settle_seed{seed}", engine, ranks, reuse, progress, seed)
+            j = judged_settle(res, row["reference"], margin, ref_seeds)
+            entries.append({"seed": seed, "status": "ok", "values": j["values"], "judged": j["judged"],
+                            "cpu_seconds": j["cpu_seconds"], "target_phi": (j.get("target_phi") or {}).get("value")})
+        except (StepFailed, OSError, ValueError) as e:  # the seed's reason; the other seeds and rows go on
+            progress(f"  [settle seed {seed}] failed: {e}")
+            entries.append({"seed": seed, "status": "fail", "reason": str(e)})
+    return {"entries": entries, "summary": settle_report.seed_summary(entries, row["reference"])}
+
+
+def settle_run(btr: str, scene: str, folder: Path, engine: str, ranks: int, reuse: bool, progress,
+               seed: int = 1) -> dict:
+    """`btr settle SCENE --seed seed` (btr_cli.settle); StepFailed with btr's reason (exit 2: a refused scene) unless
+    it wrote its packing. With reuse, a settle that finished in folder from the same scene text and the same btr
+    program (both kept beside it in settled_by.json) with the same engine and seed is taken as it is, with its
+    recorded times."""
     stamp = folder / "settled_by.json"
-    done = finished_settle(btr, scene, folder, engine) if reuse else None
+    done = finished_settle(btr, scene, folder, engine, seed) if reuse else None
     if done is not None:
-        progress(f"  [settle] reused the finished settle in {folder} ({done['cpu_seconds']:.1f} s CPU)")
+        progress(f"  [settle seed {seed}] reused the finished settle in {folder} ({done['cpu_seconds']:.1f} s CPU)")
         return done
     stamp.unlink(missing_ok=True)
-    res = btr_cli.settle(btr, scene, engine, folder, np=ranks, seed=1, progress=progress)
+    res = btr_cli.settle(btr, scene, engine, folder, np=ranks, seed=seed, progress=progress)
     write_json(stamp, settled_by(btr, scene))
     return res
 
@@ -127,13 +157,13 @@ def settled_by(btr: str, scene: str) -> dict:
     return {"scene": Path(scene).read_text(), "btr_sha256": hashlib.sha256(Path(btr).read_bytes()).hexdigest()}
 
 
-def finished_settle(btr: str, scene: str, folder: Path, engine: str) -> dict | None:
+def finished_settle(btr: str, scene: str, folder: Path, engine: str, seed: int = 1) -> dict | None:
     stamp, record_path = folder / "settled_by.json", folder / "settle.json"
     if not (stamp.exists() and record_path.exists()) or read_json(stamp) != settled_by(btr, scene):
         return None
     record = read_json(record_path)
     csv = folder / f"{record.get('scene_name')}.csv"
-    if record.get("engine") != engine or record.get("seed") != 1 or not csv.exists():
+    if record.get("engine") != engine or record.get("seed") != seed or not csv.exists():
         return None
     return {"target_reached": (record.get("target_phi") or {}).get("reached", True) is not False,
             "wall_seconds": record.get("wall_seconds"), "cpu_seconds": record.get("cpu_seconds"), "csv": str(csv),

@@ -32,6 +32,55 @@ def judge(errors: dict, floor: dict, n_seeds: int) -> dict:
     return out
 
 
+def seed_summary(entries: list, ref: dict) -> dict:
+    """Per measure of a bed row (packing fraction, coordination) over the settle seeds that finished: mean, sample
+    standard deviation (None for one seed), the mean's error against the pours' mean and over their floor, and how
+    many seeds were within the reach threshold."""
+    done = [e for e in entries if e["status"] == "ok"]
+    out = {"seeds": len(entries), "finished": len(done)}
+    for key in ("packing_fraction", "coordination"):
+        vals = [e["values"][key] for e in done if e["values"].get(key) is not None]
+        if not vals or key not in ref["mean"]:
+            continue
+        mean = float(np.mean(vals))
+        floor = ref["floor"][key]
+        out[key] = {"mean": mean, "sd": float(np.std(vals, ddof=1)) if len(vals) > 1 else None,
+                    "mean_error": mean - ref["mean"][key],
+                    "mean_error_over_floor": (mean - ref["mean"][key]) / floor if floor > 0 else None,
+                    "within": sum(bool(e["judged"][key]["within"]) for e in done if key in e["judged"]),
+                    "of": len(vals)}
+    return out
+
+
+def seeds_table(rows: list) -> list:
+    """report.md's lines for the rows settled at more than one seed (none when no row was)."""
+    rows = [r for r in rows if r.get("settle_seeds")]
+    if not rows:
+        return []
+    head = ["row", "settled phi by seed", "phi mean, sd", "pours' phi (floor)", "settled Z by seed", "Z mean, sd",
+            "pours' Z (floor)", "mean Z - pours' (floors)", "within: phi / Z"]
+    table = []
+    for r in rows:
+        ss, ref = r["settle_seeds"], r["reference"]
+        cells = [r["row"]]
+        for key in ("packing_fraction", "coordination"):
+            by_seed = " / ".join(report.fmt(e["values"].get(key)) if e["status"] == "ok" else f"seed {e['seed']} failed"
+                                 for e in ss["entries"])
+            sm = ss["summary"].get(key)
+            cells += [by_seed, f"{report.fmt(sm['mean'])}, {report.fmt(sm['sd'], 2)}" if sm else "-", _pm(ref, key)]
+        z = ss["summary"].get("coordination")
+        cells.append(f"{z['mean_error']:+.3f} ({z['mean_error_over_floor']:+.2g})"
+                     if z and z["mean_error_over_floor"] is not None else "-")
+        cells.append(" / ".join(f"{ss['summary'][k]['within']} of {ss['summary'][k]['of']}" if k in ss["summary"] else "-"
+                                for k in ("packing_fraction", "coordination")))
+        table.append(cells)
+    return ["## `btr settle` across its seeds", "",
+            "The same row settled at each seed (`btr settle SCENE --seed S`: another BTR deposit and another "
+            "calibration pour), judged as the table above: how far one settle moves from seed to seed beside the "
+            "pours' floor, and whether its mean lands on the pours'.", "",
+            report.md_table(head, table), ""]
+
+
 def threshold_in_floors(n_seeds: int) -> float:
     """The reach threshold in units of the floor: 2 sqrt(1 + 1/n)."""
     return 2.0 * math.sqrt(1.0 + 1.0 / n_seeds)
@@ -97,6 +146,7 @@ def markdown(result: dict, fig_name: str | None) -> str:
     lines += [report.md_table(table[0], table[1:]) if len(table) > 1 else "No row has a settled packing yet.", ""]
     lines += ["error / floor: the settled packing's error over the pours' seed-to-seed standard deviation; "
               f"(in) when within the reach threshold {threshold_in_floors(n):.3g}; target not reached rows say so.", ""]
+    lines += seeds_table(rows)
     other = [[r["row"], r["label"], r["status"], r["reason"] or (r.get("settle") or {}).get("note", "")]
              for r in rows if r["status"] != "ok" or (r.get("settle") or {}).get("note")]
     if other:
