@@ -91,7 +91,7 @@ namespace {
 
 // A check's steps, then the blow-up bound. No set-up: each one of LIGGGHTS 3.8 takes energy out of the frictionless
 // collapse like extra damping, so a settled bed's coordination followed the check interval (docs/guide/settle.md,
-// "The check runs' set-ups"). A `run 0` sets up before each block (new fixes, types, groups, time step).
+// "The compaction's checks without set-ups"). A `run 0` sets up before each block (fixes, types, groups, step).
 std::string check_run(const CompactionPlan& c) {
   return "run " + std::to_string(c.steps_per_check) + " pre no post no\n" +
          "if \"${btr_ekin} > ${btr_bound}\" then &\n"
