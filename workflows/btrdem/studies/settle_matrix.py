@@ -120,15 +120,15 @@ def other_seeds(btr: str, scene: str, folder: Path, engine: str, ranks: int, reu
                 margin, ref_seeds: int, settle_seeds: int) -> dict:
     """Seeds 2..settle_seeds of the row's settle (folder/settle_seedS), each judged as seed 1 is, and
     settle_report.seed_summary of all of them (seed 1: the row's settle)."""
-    s1 = row["settle"]
-    entries = [{"seed": 1, "status": "ok", "values": s1["values"], "judged": s1["judged"],
-                "cpu_seconds": s1["cpu_seconds"], "target_phi": (s1.get("target_phi") or {}).get("value")}]
+    def entry(seed: int, judged: dict) -> dict:
+        return {"seed": seed, "status": "ok", "values": judged["values"], "judged": judged["judged"],
+                "cpu_seconds": judged["cpu_seconds"], "target_phi": (judged.get("target_phi") or {}).get("value")}
+
+    entries = [entry(1, row["settle"])]
     for seed in range(2, settle_seeds + 1):
         try:
             res = settle_run(btr, scene, folder / f"settle_seed{seed}", engine, ranks, reuse, progress, seed)
-            j = judged_settle(res, row["reference"], margin, ref_seeds)
-            entries.append({"seed": seed, "status": "ok", "values": j["values"], "judged": j["judged"],
-                            "cpu_seconds": j["cpu_seconds"], "target_phi": (j.get("target_phi") or {}).get("value")})
+            entries.append(entry(seed, judged_settle(res, row["reference"], margin, ref_seeds)))
         except (StepFailed, OSError, ValueError) as e:  # the seed's reason; the other seeds and rows go on
             progress(f"  [settle seed {seed}] failed: {e}")
             entries.append({"seed": seed, "status": "fail", "reason": str(e)})
