@@ -150,6 +150,21 @@ def test_an_interrupted_case_is_a_row_with_the_signal_and_the_tables_are_rewritt
     assert json.loads((tmp_path / "run.json").read_text())["status"] == "interrupted"
 
 
+def test_a_failed_case_keeps_a_whole_refusal_of_btr_as_its_reason(tmp_path):
+    # btr settle's refusal of a shallow bed, as the size study met it: 470 characters, what to do at its end
+    why = ("btr settle: inputs/bed3d.toml: grains.count: the bed's bulk window (2 largest diameters from the floor, "
+           "walls and surface) holds no grain (bed too shallow for a bulk window: lowest surface column at z = "
+           "0.00698 m, margin 0.003999 m); settle needs at least 50 there to measure a packing fraction to compact "
+           "to and to judge the bed by: give more grains, or pour the scene (`btr pour`)")
+    rows = []
+    rec = RunRecord(tmp_path, "test", argv=["x"])
+    with rec.case("settle", rows, {"name": "settle"}):
+        raise RuntimeError("settle: btr settle exited with status 2:\n" + why)
+    assert rows[0]["status"] == "fail"
+    assert rows[0]["reason"] == "settle: btr settle exited with status 2: " + why
+    assert len(rows[0]["reason"]) > 300
+
+
 # ---- sizes checked before memory ------------------------------------------------------------------
 
 def scene_with(source_dir: Path, tmp_path: Path, scene: str, old: str, new: str) -> Path:

@@ -289,7 +289,8 @@ class RunRecord:
             message = str(e).strip() or type(e).__name__
             lines = [x.strip() for x in message.splitlines() if x.strip()]
             reason = " ".join(lines[:2]) if lines[0].endswith(":") else lines[0]  # "X failed:\n<why>"
-            row.update(status="fail", reason=reason[:300])
+            # 600 characters: a whole refusal of btr, with what to do (btr settle's run to 470)
+            row.update(status="fail", reason=reason[:600])
             entry.update(status="failed", wall_seconds=time.monotonic() - t0, error=message[-3000:])
             self.progress(f"   {name}: FAILED ({row['reason']}); the study goes on")
         else:
