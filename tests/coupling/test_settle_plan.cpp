@@ -240,7 +240,8 @@ TEST(SettlePlan, ChoicesRecordTheTargetAndWhereEachValueCameFrom) {
   }
   EXPECT_EQ(c.record["target_phi"]["from"]["source"], "calibration pour");
   s.relax.engine = "yade";
-  EXPECT_EQ(settle_choices(s, 0.63, {}, 15.0).settings.compaction_damping, 0.5);
+  // YADE compacts at its own damping, measured against YADE's pours of bed3d (docs/guide/settle.md), not LIGGGHTS'
+  EXPECT_EQ(settle_choices(s, 0.63, {}, 15.0).settings.compaction_damping, 0.4);
   EXPECT_EQ(settle_choices(s, 0.63, {}, 15.0).settings.damping, 0.5) << "YADE's settle keeps the damping it was measured at";
 }
 
