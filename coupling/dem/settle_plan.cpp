@@ -217,11 +217,10 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
       {"compaction_damping",
        {{"value", compaction_damping},
         {"bed_depth_largest_diameters", depth},
-        {"from", yade ? "btr settle's YADE compaction damping, measured on bed3d at 14.1 largest diameters deep "
-                        "(this bed: " + depth_text + ")"
-                      : "btr settle's LIGGGHTS compaction damping, measured on bed3d at " + g6(kDampingAnchorDepth) +
-                            " largest diameters deep (this bed: " + depth_text +
-                            (measured_depth ? ")" : ", away from that depth: not measured there)")}}},
+        {"from", std::string("btr settle's ") + (yade ? "YADE" : "LIGGGHTS") +
+                     " compaction damping, measured against the engine's own pours of bed3d at " +
+                     g6(kDampingAnchorDepth) + " largest diameters deep (this bed: " + depth_text +
+                     (measured_depth ? ")" : ", away from that depth: not measured there)")}}},
       {"compaction_timestep_fraction",
        {{"value", kSettleCompactionTimestepFraction},
         {"from", "btr settle: twice the scene's usual 0.2, measured on bed3d to give the same structure"}}},

@@ -204,6 +204,14 @@ TEST(SettlePlan, CompactionDampingIsTheMeasuredValueAndSaysWhereItWasMeasured) {
   const std::string near = settle_choices(s, 0.63, {}, 15.0).record["compaction_damping"]["from"];
   EXPECT_EQ(near.find("not measured"), std::string::npos) << near;
   EXPECT_NE(near.find("this bed: 15 largest diameters"), std::string::npos) << near;
+  Scene y = s;  // YADE's value was measured at the same depth, and its record says so the same way
+  y.relax.engine = "yade";
+  EXPECT_EQ(*settle_choices(y, 0.63, {}, 9.4).settings.compaction_damping, kYadeCompactionDamping);
+  const std::string yade_away = settle_choices(y, 0.63, {}, 9.4).record["compaction_damping"]["from"];
+  EXPECT_NE(yade_away.find("YADE"), std::string::npos) << yade_away;
+  EXPECT_NE(yade_away.find("not measured there"), std::string::npos) << yade_away;
+  const std::string yade_near = settle_choices(y, 0.63, {}, 14.1).record["compaction_damping"]["from"];
+  EXPECT_EQ(yade_near.find("not measured"), std::string::npos) << yade_near;
 }
 
 // A bed deeper than 1.5x the depth settle was measured at gets a warning naming its depth, in settle.json too;
