@@ -28,6 +28,13 @@ class StepFailed(Exception):
     """A workflow step failed; the message says which and why."""
 
 
+def failure_reason(message: str) -> str:
+    """A failed row's reason: the message's first line ("X failed:" with the line that says why), up to 600
+    characters, so that a whole refusal of btr, what to do included, fits (btr settle's run to 470)."""
+    lines = [x.strip() for x in str(message).splitlines() if x.strip()] or ["(no message)"]
+    return (" ".join(lines[:2]) if lines[0].endswith(":") else lines[0])[:600]
+
+
 class Interrupted(KeyboardInterrupt):
     """A stop signal (SIGTERM, SIGINT, SIGHUP) reached the workflow. The command it was running has been
     stopped; the case or step that ran records it, and the workflow ends with exit status 128 + signum."""
@@ -287,10 +294,7 @@ class RunRecord:
             raise
         except Exception as e:  # noqa: BLE001 - a failed case is a row with its reason, not a failed study
             message = str(e).strip() or type(e).__name__
-            lines = [x.strip() for x in message.splitlines() if x.strip()]
-            reason = " ".join(lines[:2]) if lines[0].endswith(":") else lines[0]  # "X failed:\n<why>"
-            # 600 characters: a whole refusal of btr, with what to do (btr settle's run to 470)
-            row.update(status="fail", reason=reason[:600])
+            row.update(status="fail", reason=failure_reason(message))
             entry.update(status="failed", wall_seconds=time.monotonic() - t0, error=message[-3000:])
             self.progress(f"   {name}: FAILED ({row['reason']}); the study goes on")
         else:

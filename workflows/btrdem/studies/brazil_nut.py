@@ -23,7 +23,7 @@ import numpy as np
 
 from ..core import report
 from ..core.io import atomic_write_text, write_scene_toml
-from ..core.runner import REPO, RunRecord, StepFailed, find_btr, run_command
+from ..core.runner import REPO, RunRecord, StepFailed, failure_reason, find_btr, run_command
 
 PHI_C = {3: (3 + math.sqrt(2)) / (3 - math.sqrt(2)), 2: 12.9}
 D = 1.0e-3  # bed-grain diameter [m]
@@ -124,7 +124,7 @@ class Study:
                 row.update(summarise(t, phi))
                 self.series[tag] = t
         except StepFailed as e:
-            row.update(status="failed", reason=str(e).splitlines()[0][:300])
+            row.update(status="failed", reason=failure_reason(str(e)))
         self.rows.append(row)
         self.write_outputs()
 

@@ -22,7 +22,7 @@ import numpy as np
 
 from ..core import report
 from ..core.io import atomic_write_text, read_packing, read_scene_toml, write_scene_toml
-from ..core.runner import REPO, RunRecord, StepFailed, find_btr, run_command
+from ..core.runner import REPO, RunRecord, StepFailed, failure_reason, find_btr, run_command
 
 
 def cases(tiny: bool) -> list:
@@ -104,7 +104,7 @@ class Study:
                 snaps = sorted(d.glob(f"{name_}_s[0-9]*.csv"))
                 self.snaps[name] = (snaps[0], snaps[-1], scene["container"]["radius"])
         except StepFailed as e:
-            row.update(status="failed", reason=str(e).splitlines()[0][:300])
+            row.update(status="failed", reason=failure_reason(str(e)))
         self.rows.append(row)
         self.write_outputs()
 

@@ -49,7 +49,7 @@ from ..analysis import measures
 from ..core.io import atomic_write_text, read_json, read_packing, write_json
 from .pipeline import default_outdir, scene_inputs
 from ..dem.pour import PourSettings, finished_pour, pour
-from ..core.runner import RunRecord, StepFailed, find_btr
+from ..core.runner import RunRecord, StepFailed, failure_reason, find_btr
 
 METHODS = ("relax", "damped", "target-phi", "target-phi-unbalanced", "shake", "preload", "preload-damped", "settle")
 # The measures the verdict requires (the others are reported beside them).
@@ -485,7 +485,7 @@ def run_size_study(scene_path: str, counts, outdir=None, progress=print, **kwarg
                 res = run_error_vs_runtime(scene_path, outdir / f"n{n}", count=int(n), progress=progress, **kwargs)
             entry.update(status="ok", **size_entry(res))
         except StepFailed as e:
-            entry.update(status="fail", reason=str(e).strip().splitlines()[0][:300])
+            entry.update(status="fail", reason=failure_reason(str(e)))
             progress(f"size study: {n} grains FAILED ({entry['reason']}); the study goes on")
         write_size_study(outdir, scene_path, sizes)
     return {"sizes": sizes}
