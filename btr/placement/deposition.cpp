@@ -7,6 +7,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <new>
 #include <type_traits>
 #include <sstream>
@@ -20,6 +21,7 @@
 #include "btr/placement/mesh_placement.h"
 #include "btr/placement/neighbour_grid.h"
 #include "btr/placement/obstacle.h"
+#include "btr/placement/path_graze.h"
 #include "btr/placement/walls.h"
 
 namespace btr {
@@ -27,6 +29,11 @@ namespace {
 
 // Events in a row without the grain moving, its contacts cycling, after which it is wedged (place()).
 constexpr int kWedgedEvents = 12;
+
+// A wall path's steps look for grains entered and left between their samples deeper than kGrazeDepth radii
+// (shallower is a tangency: the self-check's overlap tolerance); the first step leaves out the grains the walk
+// starts within kTouching radii of (the path leaves them). first_graze, btr/placement/path_graze.h.
+constexpr double kGrazeDepth = 1e-9, kTouching = 1e-9;
 
 // splitmix64: a deterministic hash for tie-breaks (which way a grain balanced on a top rolls).
 std::uint64_t mix(std::uint64_t z) {
@@ -243,7 +250,8 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
 // ---------------------------------------------------------------------------------------------
 // Roll on one grain while pressed against the cylinder wall. The path (centre on the cylinder
 // |x_h| = R, at distance R_p from the support) is not a circle: it is followed in small steps of
-// the azimuth, and each event is located by bisection.
+// the azimuth, each proven clear between its ends or searched for a grain entered in it (first_graze),
+// and each event is located by bisection.
 // Returns true when the grain comes to rest at the lowest point of that curve.
 bool Deposition::Impl::roll_along_cylinder(Vec3& x, double r, Contacts& active, int si, int ci, const Vec3& d,
                                            const std::vector<Obstacle>& walls) {
@@ -251,6 +259,7 @@ bool Deposition::Impl::roll_along_cylinder(Vec3& x, double r, Contacts& active, 
   const Obstacle cyl = active.item[ci];
   const double Rc = cyl.R;
   double phi = std::atan2(x.y(), x.x());
+  const double start = phi;
   const double sign = d.dot(Vec3(-std::sin(phi), std::cos(phi), 0.0)) >= 0.0 ? 1.0 : -1.0;
   const double zside = x.z() >= p.c.z() ? 1.0 : -1.0;
   auto at = [&](double f) -> std::pair<Vec3, bool> {
@@ -285,6 +294,16 @@ bool Deposition::Impl::roll_along_cylinder(Vec3& x, double r, Contacts& active, 
   };
   const double step = sign * 0.05 * r / Rc;
   const double reach = 2.0 * r + 2.0 * r_max;
+  // What a step could pass between its samples (the candidates not in contact, and the floor).
+  std::vector<Obstacle> partners;
+  auto point = [&](double f) {
+    const auto [P, ok] = at(f);
+    return ok ? P : Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
+  };
+  auto spread = [&](double f, double h) {
+    const double q = std::hypot(Rc * std::cos(f) - p.c.x(), Rc * std::sin(f) - p.c.y());
+    return tube_path_spread(Rc, h, q, p.R * p.R - q * q);
+  };
   for (int chunk = 0; chunk < 1000; ++chunk) {
     candidates.clear();
     const Vec3 here = at(phi).first;
@@ -293,12 +312,22 @@ bool Deposition::Impl::roll_along_cylinder(Vec3& x, double r, Contacts& active, 
                    [&](std::int32_t i, const Vec3& c, double radius, int image) {
                      if (can_meet_on(p, c, r + radius)) candidates.push_back(sphere(i, c, radius, image, r));
                    });
+    partners.clear();
+    for (const Obstacle& o : candidates)
+      if (!active.has(o.key)) partners.push_back(o);
+    partners.push_back(walls[0]);
     for (int k = 0; k < 20; ++k) {
-      if (condition(phi + step) == 0) {
-        phi += step;
-        continue;
+      double f1 = phi + step;
+      if (condition(f1) == 0) {
+        const double touching = phi == start ? kTouching * r : -std::numeric_limits<double>::infinity();
+        const double graze = first_graze(phi, f1, point(phi), point(f1), partners, kGrazeDepth * r, touching, point, spread);
+        if (std::isnan(graze)) {
+          phi = f1;
+          continue;
+        }
+        f1 = graze;  // a partner entered and left between the samples: its entry lies in (phi, graze]
       }
-      double f0 = phi, f1 = phi + step;
+      double f0 = phi;
       for (int it = 0; it < 200 && std::abs(f1 - f0) > 1e-15; ++it) {
         const double fm = 0.5 * (f0 + f1);
         (condition(fm) == 0 ? f0 : f1) = fm;
@@ -394,8 +423,9 @@ bool Deposition::Impl::drum_rest(const Vec3& x, const Contacts& active) const {
 // ---------------------------------------------------------------------------------------------
 // Roll on one grain while pressed against the drum wall (3D). As for the vertical cylinder, the path
 // (centre on the drum's centre surface at distance R_p from the support) is not a circle: it is
-// followed in small steps of the angle theta about the axis (height z_axis - R cos theta), each event
-// located by bisection. y comes from the support: y = y_p +- sqrt(R_p^2 - (x - x_p)^2 - (z - z_p)^2).
+// followed in small steps of the angle theta about the axis (height z_axis - R cos theta), each step
+// proven clear or searched (first_graze), each event located by bisection. y comes from the support:
+// y = y_p +- sqrt(R_p^2 - (x - x_p)^2 - (z - z_p)^2).
 // The path goes down, towards theta = 0; it ends at theta = 0 or where the two branches meet (y = y_p),
 // the lowest point of the closed curve. Returns true when the grain comes to rest there.
 bool Deposition::Impl::roll_along_drum(Vec3& x, double r, Contacts& active, int si, int di, const Vec3& d,
@@ -440,6 +470,16 @@ bool Deposition::Impl::roll_along_drum(Vec3& x, double r, Contacts& active, int 
   };
   const double step = sign * 0.05 * r / Rc;
   const double reach = 2.0 * r + 2.0 * r_max;
+  // What a step could pass between its samples (the candidates not in contact, and the end walls).
+  std::vector<Obstacle> partners;
+  auto point = [&](double f) {
+    const auto [P, ok] = at(f);
+    return ok ? P : Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
+  };
+  auto spread = [&](double f, double h) {
+    const double q = std::hypot(Rc * std::sin(f) - p.c.x(), za - Rc * std::cos(f) - p.c.z());
+    return tube_path_spread(Rc, h, q, p.R * p.R - q * q);
+  };
   for (int chunk = 0; chunk < 1000; ++chunk) {
     candidates.clear();
     // The first chunk from x itself: at(start) may be off the path where the branches meet (s < 0).
@@ -452,12 +492,25 @@ bool Deposition::Impl::roll_along_drum(Vec3& x, double r, Contacts& active, int 
       if (dx * dx + dz * dz < near * near && can_meet_on(p, c, r + radius))
         candidates.push_back(sphere(i, c, radius, image, r));
     });
+    partners.clear();
+    for (const Obstacle& o : candidates)
+      if (!active.has(o.key)) partners.push_back(o);
+    for (const Obstacle& w : walls)
+      if (w.key != drum.key && !w.is_floor()) partners.push_back(w);
     for (int k = 0; k < 20; ++k) {
-      if (condition(theta + step) == 0) {
-        theta += step;
-        continue;
+      double f1 = theta + step;
+      if (condition(f1) == 0) {
+        // The path's first point may lie off it where the branches meet: the grain's own centre stands for it.
+        const Vec3 from = theta == start ? x : point(theta);
+        const double touching = theta == start ? kTouching * r : -std::numeric_limits<double>::infinity();
+        const double graze = first_graze(theta, f1, from, point(f1), partners, kGrazeDepth * r, touching, point, spread);
+        if (std::isnan(graze)) {
+          theta = f1;
+          continue;
+        }
+        f1 = graze;  // a partner entered and left between the samples: its entry lies in (theta, graze]
       }
-      double f0 = theta, f1 = theta + step;
+      double f0 = theta;
       for (int it = 0; it < 200 && std::abs(f1 - f0) > 1e-15; ++it) {
         const double fm = 0.5 * (f0 + f1);
         (condition(fm) == 0 ? f0 : f1) = fm;

@@ -14,6 +14,7 @@
 #include "btr/placement/descent.h"
 #include "btr/placement/neighbour_grid.h"
 #include "btr/placement/obstacle.h"
+#include "btr/placement/path_graze.h"
 #include "btr/verify/check.h"
 #include "containers.h"
 #include "random_arcs.h"
@@ -205,6 +206,161 @@ TEST(HotLoopCorners, TubeExitAgreesWithDenseSampling) {
     }
   }
   EXPECT_GT(exits, 30);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Along a cylinder (or drum) wall on one grain the path is followed in steps of 0.05 r of arc, and a step
+// looked only at its ends: a grain it enters and leaves between two samples was passed through.
+// first_graze (btr/placement/path_graze.h) proves every partner clear between two samples or finds a
+// point inside one.
+
+namespace graze {
+
+// The cylinder of radius 20, grains of radius 1: the moving centre stays on |x_h| = Rc = 19. Support p on
+// the floor against the wall at azimuth 0; pressed against the wall on p the centre follows
+// P(f) = (Rc cos f, Rc sin f, 1 + sqrt(4 - q^2)), q = 2 Rc sin(|f| / 2), the section's distance from p's.
+constexpr double kRc = 19.0, kDrop = 0.02, kStep = 0.05 / kRc;
+Vec3 path(double f) {
+  const double q = 2.0 * kRc * std::sin(0.5 * std::abs(f));
+  return Vec3(kRc * std::cos(f), kRc * std::sin(f), 1.0 + std::sqrt(std::max(0.0, 4.0 - q * q)));
+}
+double spread(double f, double h) {
+  const double q = 2.0 * kRc * std::sin(0.5 * std::abs(f));
+  return tube_path_spread(kRc, h, q, 4.0 - q * q);
+}
+
+// Grain o of radius ro on the floor at azimuth fo whose contact sphere (radius 1 + ro) the path enters by
+// `depth` at its nearest approach (depth < 0: passes that far clear). Its distance from the axis is set by
+// bisection; the nearest approach, on [0.03, 0.1], by golden section. Returns o's centre and where the
+// nearest approach lies.
+std::pair<Vec3, double> grazed_grain(double fo, double ro, double depth) {
+  double f_near = 0.0;
+  auto nearest = [&](double rho) {
+    const Vec3 o(rho * std::cos(fo), rho * std::sin(fo), ro);
+    double a = 0.03, b = 0.1;
+    const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+    while (b - a > 1e-13) {
+      const double c = b - g * (b - a), d = a + g * (b - a);
+      if ((path(c) - o).norm() < (path(d) - o).norm()) b = d;
+      else a = c;
+    }
+    f_near = 0.5 * (a + b);
+    return (path(f_near) - o).norm();
+  };
+  double lo = 12.0, hi = 18.0;  // o comes nearer the path as it moves out towards the wall
+  for (int it = 0; it < 200; ++it) {
+    const double m = 0.5 * (lo + hi);
+    (nearest(m) > 1.0 + ro - depth ? lo : hi) = m;
+  }
+  const double near = nearest(lo);
+  EXPECT_NEAR(near, 1.0 + ro - depth, 1e-12);
+  return {Vec3(lo * std::cos(fo), lo * std::sin(fo), ro), f_near};
+}
+
+double between(btr_test::UniformDraws& u, double lo, double hi) { return lo + (hi - lo) * u(); }
+
+Obstacle sphere_partner(const Vec3& c, double R) {
+  Obstacle o;
+  o.kind = Obstacle::Kind::Sphere;
+  o.c = c;
+  o.R = R;
+  return o;
+}
+
+}  // namespace graze
+
+TEST(HotLoopCorners, AGrainEnteredBetweenTwoSamplesOfTheWallPathIsFound) {
+  const double ro = 2.5, tol = 1e-9;  // the engine's graze depth (kGrazeDepth, r = 1)
+  const double none = -std::numeric_limits<double>::infinity();  // no partner left out at the first sample
+  const auto [c, f_near] = graze::grazed_grain(0.0592, ro, 1e-7);
+  const std::vector<Obstacle> partners{graze::sphere_partner(c, 1.0 + ro)};
+  auto condition = [&](double f) { return partners[0].gap(graze::path(f)) < -tol ? 1 : 0; };
+  // The samples of the walk from kDrop on either side of the nearest approach: both clear, so a step
+  // that looks at its ends only passes o. The stretch inside o (~8e-5 rad) lies between them.
+  const double k = std::floor((f_near - graze::kDrop) / graze::kStep);
+  const double a = graze::kDrop + k * graze::kStep, b = a + graze::kStep;
+  ASSERT_EQ(condition(a), 0);
+  ASSERT_EQ(condition(b), 0);
+  ASSERT_EQ(condition(f_near), 1);
+  const double f = first_graze(a, b, graze::path(a), graze::path(b), partners, tol, none, graze::path, graze::spread);
+  ASSERT_FALSE(std::isnan(f));
+  EXPECT_GT(f, a);
+  EXPECT_LT(f, b);
+  EXPECT_EQ(condition(f), 1);
+  // Inside o's stretch, whose half-width is about sqrt(2 depth (1 + ro) / curvature) well under 1e-3 rad.
+  EXPECT_NEAR(f, f_near, 1e-3);
+  // Passing 1e-9 clear of o, or entering it by less than the graze depth (a tangency): nothing found.
+  for (const double depth : {-1e-9, 0.5e-9}) {
+    const std::vector<Obstacle> near{graze::sphere_partner(graze::grazed_grain(0.0592, ro, depth).first, 1.0 + ro)};
+    EXPECT_TRUE(std::isnan(first_graze(a, b, graze::path(a), graze::path(b), near, tol, none, graze::path, graze::spread)))
+        << depth;
+  }
+}
+
+TEST(HotLoopCorners, TubePathSpreadBoundsTheTravelAlongTheWallPath) {
+  // The bound against the largest distance 2000 samples find from P(f) over [f, f + h].
+  btr_test::UniformDraws uniform{777};
+  const double f_max = 2.0 * std::asin(1.0 / graze::kRc);  // the path ends where q = 2
+  for (int trial = 0; trial < 500; ++trial) {
+    const double f = graze::between(uniform, -0.95 * f_max, 0.95 * f_max), h = graze::between(uniform, -0.01, 0.01);
+    if (std::abs(f + h) >= f_max) continue;
+    double far = 0.0;
+    for (int j = 1; j <= 2000; ++j) far = std::max(far, (graze::path(f + h * j / 2000) - graze::path(f)).norm());
+    EXPECT_LE(far, graze::spread(f, h) * (1.0 + 1e-12)) << "trial " << trial;
+  }
+}
+
+TEST(HotLoopCorners, WallPathGrazesAgreeWithDenseSampling) {
+  // Random grains about the wall path, some entered by up to 1e-4, some missed by as much: over one step
+  // whose ends are clear, first_graze finds a point inside exactly when 20000 samples see one.
+  btr_test::UniformDraws uniform{4242};
+  const double tol = 1e-9, none = -std::numeric_limits<double>::infinity();
+  int found = 0, clear = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const double fc = graze::between(uniform, 0.0, 0.09), ro = graze::between(uniform, 0.2, 2.5), depth = graze::between(uniform, -1e-4, 1e-4);
+    // o's centre off the path point at fc, along a random direction normal to the path there.
+    const Vec3 T = (graze::path(fc + 1e-6) - graze::path(fc - 1e-6)).normalized();
+    Vec3 n(graze::between(uniform, -1, 1), graze::between(uniform, -1, 1), graze::between(uniform, -1, 1));
+    n = (n - n.dot(T) * T).normalized();
+    const std::vector<Obstacle> partners{graze::sphere_partner(graze::path(fc) + n * (1.0 + ro - depth), 1.0 + ro)};
+    auto condition = [&](double f) { return partners[0].gap(graze::path(f)) < -tol ? 1 : 0; };
+    const double a = fc - graze::between(uniform, 0.0, graze::kStep), b = a + graze::kStep;
+    if (condition(a) || condition(b)) continue;
+    const int samples = 20000;
+    double first = -1.0;
+    for (int j = 1; j < samples && first < 0.0; ++j)
+      if (condition(a + (b - a) * j / samples)) first = a + (b - a) * j / samples;
+    const double f = first_graze(a, b, graze::path(a), graze::path(b), partners, tol, none, graze::path, graze::spread);
+    if (first >= 0.0) {
+      ++found;
+      ASSERT_FALSE(std::isnan(f)) << "trial " << trial;
+      EXPECT_EQ(condition(f), 1) << "trial " << trial;
+      EXPECT_LE(f, first + 1e-12) << "trial " << trial;  // the leftmost: the entry, not a later point inside
+    } else {
+      ++clear;
+      if (!std::isnan(f)) EXPECT_EQ(condition(f), 1) << "trial " << trial;  // a stretch between samples: real
+    }
+  }
+  EXPECT_GT(found, 40);
+  EXPECT_GT(clear, 40);
+}
+
+TEST(HotLoopCorners, AGrainGrazedAlongTheCylinderWallLeavesAValidPacking) {
+  // The grain dropped against the wall at azimuth kDrop lands on p, rolls along the wall on it, touches
+  // the grazed grain o on the way (above), and ends on the floor against the wall and p, at azimuth
+  // 2 asin(1 / Rc) (|x - p| = 2 at z = 1).
+  const double ro = 2.5;
+  const Vec3 o = graze::grazed_grain(0.0592, ro, 1e-7).first;
+  Container c;
+  c.kind = ContainerKind::Cylinder;
+  c.radius = 20.0;
+  Deposition dep(3, c, ro);
+  ASSERT_NEAR(drop(dep, graze::kRc, 0.0, 1.0).z(), 1.0, 1e-12);
+  ASSERT_NEAR(drop(dep, o.x(), o.y(), ro).z(), ro, 1e-12);
+  const Vec3 x = drop(dep, graze::kRc * std::cos(graze::kDrop), graze::kRc * std::sin(graze::kDrop), 1.0);
+  EXPECT_NEAR(x.z(), 1.0, 1e-12);
+  EXPECT_NEAR(std::atan2(x.y(), x.x()), 2.0 * std::asin(1.0 / graze::kRc), 1e-9);
+  expect_valid(dep);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -1,0 +1,76 @@
+#pragma once
+// A path followed in steps (the curve along a cylinder or drum wall, btr/placement/deposition.cpp) sees a
+// partner only where a sample lies inside it: one the path enters and leaves between two samples would be
+// passed. Between two samples that are both clear, this search proves each partner clear or finds a point
+// inside one. A partner's gap is 1-Lipschitz in the centre, so partner o stays clear (to `depth`) over [a, b] when
+//   gap_o(P(a)) >= spread(a, b - a) - depth  or  gap_o(P(b)) >= spread(b, a - b) - depth,
+// with spread(f, h) a bound on how far the centre moves from P(f) while the angle runs over h. Spans that
+// cannot be cleared are split, leftmost first, down to spans of 1e-15 rad.
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "btr/placement/obstacle.h"
+
+namespace btr {
+
+// The angle through which a point on a circle of radius Rc (the tube's section) turns over h moves it at
+// most Rc |h|; along the axis, w = w_p +- sqrt(s) with s = R_p^2 - q^2 (q: the section's distance from the
+// support's section, which changes by at most that much), so |dw| <= |ds| / sqrt(s) <= c (2 q + c) / sqrt(s).
+inline double tube_path_spread(double Rc, double h, double q, double s) {
+  if (!(s > 0.0)) return std::numeric_limits<double>::infinity();
+  const double c = Rc * std::abs(h);
+  return std::hypot(c, c * (2.0 * q + c) / std::sqrt(s));
+}
+
+namespace detail {
+
+inline bool clear_from(const Obstacle& o, const Vec3& P, double spread, double depth) {
+  const double need = spread - depth;  // the gap that keeps o clear
+  if (o.kind == Obstacle::Kind::Sphere) {
+    const double d = o.R + need;
+    return d <= 0.0 || (P - o.c).squaredNorm() >= d * d;
+  }
+  return o.gap(P) >= need;
+}
+
+template <class At, class Spread>
+double graze_in(double lo, double hi, const Vec3& Plo, const Vec3& Phi, const std::vector<const Obstacle*>& partners,
+                double depth, At& at, Spread& spread) {
+  const double Dlo = spread(lo, hi - lo), Dhi = spread(hi, lo - hi);
+  std::vector<const Obstacle*> open;
+  for (const Obstacle* o : partners)
+    if (!clear_from(*o, Plo, Dlo, depth) && !clear_from(*o, Phi, Dhi, depth)) open.push_back(o);
+  if (open.empty() || std::abs(hi - lo) <= 1e-15 * std::max(1.0, std::abs(lo))) return std::nan("");
+  const double m = 0.5 * (lo + hi);
+  const Vec3 Pm = at(m);
+  const double left = graze_in(lo, m, Plo, Pm, open, depth, at, spread);
+  if (!std::isnan(left)) return left;
+  for (const Obstacle* o : open)
+    if (o->gap(Pm) < -depth) return m;
+  return graze_in(m, hi, Pm, Phi, open, depth, at, spread);
+}
+
+}  // namespace detail
+
+// Between samples a and b of the path (both clear), the leftmost angle found where a partner is entered
+// deeper than `depth`, or NaN when every partner is proven clear to that depth (a shallower graze is a
+// tangency, as for the arcs). at(f) is the centre at angle f (NaN coordinates off the path), spread(f, h)
+// bounds its travel from there over h (tube_path_spread).
+// touching: partners whose gap at a is below it are left to the step's test at b. The first step of a walk
+// passes a small positive value: its start is no checked sample, and a grain it starts on (released by the
+// descent, or crept a hair into by round-off) is one the path leaves; later steps pass -infinity.
+template <class At, class Spread>
+double first_graze(double a, double b, const Vec3& Pa, const Vec3& Pb, const std::vector<Obstacle>& partners,
+                   double depth, double touching, At at, Spread spread) {
+  const double Da = spread(a, b - a), Db = spread(b, a - b);
+  const bool skip = touching > -std::numeric_limits<double>::infinity();
+  std::vector<const Obstacle*> open;
+  for (const Obstacle& o : partners)
+    if (!detail::clear_from(o, Pa, Da, depth) && !detail::clear_from(o, Pb, Db, depth) && !(skip && o.gap(Pa) < touching))
+      open.push_back(&o);
+  if (open.empty()) return std::nan("");
+  return detail::graze_in(a, b, Pa, Pb, open, depth, at, spread);
+}
+
+}  // namespace btr
