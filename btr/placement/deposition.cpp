@@ -89,6 +89,16 @@ struct Deposition::Impl {
   const Grain& place(const Drop& drop);
   void fall(Vec3& x, double r, Contacts& active, const std::vector<Obstacle>& walls);
   void roll_on_arc(Vec3& x, double r, Contacts& active, const CircleArc& arc, const std::vector<Obstacle>& walls);
+  // The curve a grain follows on one grain while pressed against the cylinder or the drum (walk_wall_path).
+  struct WallPath {
+    double start = 0.0, step = 0.0;   // the angle the walk starts at, and its step (signed, 0.05 r of arc)
+    double radius = 0.0;              // of the wall's centre surface
+    bool start_off_curve = false;     // the start may lie off the curve (the drum): x stands for it
+    std::vector<Obstacle> walls;      // the flat walls the path can meet
+  };
+  template <class At, class Ends, class Tangent, class Spread, class Near>
+  bool walk_wall_path(Vec3& x, double r, Contacts& active, int sphere, int wall, const WallPath& path, At at, Ends ends,
+                      Tangent tangent, Spread spread, Near near);
   bool roll_along_drum(Vec3& x, double r, Contacts& active, int sphere, int drum, const Vec3& d,
                        const std::vector<Obstacle>& walls);
   bool drum_rest(const Vec3& x, const Contacts& active) const;
@@ -248,19 +258,115 @@ void Deposition::Impl::roll_on_arc(Vec3& x, double r, Contacts& active, const Ci
 }
 
 // ---------------------------------------------------------------------------------------------
-// Roll on one grain while pressed against the cylinder wall. The path (centre on the cylinder
-// |x_h| = R, at distance R_p from the support) is not a circle: it is followed in small steps of
-// the azimuth, each proven clear between its ends or searched for a grain entered in it (first_graze),
-// and each event is located by bisection.
-// Returns true when the grain comes to rest at the lowest point of that curve.
+// A grain rolling on one grain p while pressed against a curved wall (the cylinder, or the drum) keeps its
+// centre on the curve where p's contact sphere meets the wall's centre surface: not a circle. The walk follows it
+// by its angle f about the wall's axis in steps of 0.05 r of arc, proves each step clear between its ends or
+// finds a grain entered in it (first_graze), and locates the first event by bisection. The path supplies at(f)
+// (the centre, and whether f is on the curve), ends(f, on) (an end of the curve at f: 2 lift off p, 4 its lowest
+// point; else 0), tangent(f, P, T) (the unit tangent T along the motion at P, or 4 where the motion turns up, past
+// the lowest point), spread(f, h) (a bound of the centre's travel from f over h) and near(c, R, here, travel) (can a grain centred
+// at c, R = r + its radius, be met within `travel` of here?). Returns true at the lowest point of the curve.
+template <class At, class Ends, class Tangent, class Spread, class Near>
+bool Deposition::Impl::walk_wall_path(Vec3& x, double r, Contacts& active, int si, int wi, const WallPath& path,
+                                      At at, Ends ends, Tangent tangent, Spread spread, Near near) {
+  const Obstacle p = active.item[si];
+  const Obstacle wall = active.item[wi];
+  const Vec3 z = Vec3::UnitZ();
+  const double gap_tol = 1e-12 * r;
+  // 0: continue; 1: new contact; 2: lift off p; 3: lift off the wall; 4: lowest point passed.
+  std::vector<Obstacle> candidates;
+  auto condition = [&](double f) -> int {
+    auto [P, ok] = at(f);
+    if (const int end = ends(f, ok)) return end;
+    for (const Obstacle& o : candidates)
+      if (overlaps(o, P, gap_tol) && !active.has(o.key)) return 1;
+    for (const Obstacle& w : path.walls)
+      if (w.gap(P) < -gap_tol) return 1;
+    Vec3 T;
+    if (const int turn = tangent(f, P, T)) return turn;
+    const Vec3 g_perp = z - z.dot(T) * T;
+    const Vec3 np = p.normal(P), nw = wall.normal(P);
+    if (unloads(g_perp, np, nw)) return 2;
+    if (unloads(g_perp, nw, np)) return 3;
+    return 0;
+  };
+  // What a step could pass between its samples (the candidates not in contact, and the walls).
+  std::vector<Obstacle> partners;
+  auto point = [&](double f) {
+    const auto [P, ok] = at(f);
+    return ok ? P : Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
+  };
+  const double step = path.step;
+  const double reach = 2.0 * r + 2.0 * r_max;
+  double f = path.start;
+  for (int chunk = 0; chunk < 1000; ++chunk) {
+    candidates.clear();
+    // Where the start lies off the curve (the drum's branches meeting), the first stretch from x itself.
+    const Vec3 here = chunk == 0 && path.start_off_curve ? x : at(f).first;
+    const double travel = 20 * std::abs(step) * path.radius;
+    const Vec3 span = Vec3::Constant(reach + travel);
+    grid.visit_box(here - span, here + span, [&](std::int32_t i, const Vec3& c, double radius, int image) {
+      if (near(c, r + radius, here, travel) && can_meet_on(p, c, r + radius))
+        candidates.push_back(sphere(i, c, radius, image, r));
+    });
+    partners.clear();
+    for (const Obstacle& o : candidates)
+      if (!active.has(o.key)) partners.push_back(o);
+    for (const Obstacle& w : path.walls) partners.push_back(w);
+    for (int k = 0; k < 20; ++k) {
+      double f1 = f + step;
+      if (condition(f1) == 0) {
+        const bool first = f == path.start;
+        const Vec3 from = first && path.start_off_curve ? x : point(f);
+        const double touching = first ? kTouching * r : -std::numeric_limits<double>::infinity();
+        const double graze = first_graze(f, f1, from, point(f1), partners, kGrazeDepth * r, touching, point, spread);
+        if (std::isnan(graze)) {
+          f = f1;
+          continue;
+        }
+        f1 = graze;  // a partner entered and left between the samples: its entry lies in (f, graze]
+      }
+      double f0 = f;
+      for (int it = 0; it < 200 && std::abs(f1 - f0) > 1e-15; ++it) {
+        const double fm = 0.5 * (f0 + f1);
+        (condition(fm) == 0 ? f0 : f1) = fm;
+      }
+      // No progress from a start off the curve: the grain stays where it is.
+      if (!(path.start_off_curve && f0 == path.start)) x = at(f0).first;
+      switch (condition(f1)) {
+        case 1: {
+          const Vec3 P1 = at(f1).first;
+          for (const Obstacle& o : candidates)
+            if (o.gap(P1) < -gap_tol) active.add(o);
+          for (const Obstacle& w : path.walls)
+            if (w.gap(P1) < -gap_tol) active.add(w);
+          return false;
+        }
+        case 2: active.remove(si); return false;
+        case 3: active.remove(wi); return false;
+        case 4: return true;  // the lowest point of the curve
+        default: f = f1; continue;
+      }
+    }
+  }
+  x = at(f).first;
+  return false;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Roll on one grain while pressed against the cylinder wall: the walk along its curve, |x_h| = R at distance
+// R_p from the support, by the azimuth. Returns true when the grain comes to rest at the lowest point of that curve.
 bool Deposition::Impl::roll_along_cylinder(Vec3& x, double r, Contacts& active, int si, int ci, const Vec3& d,
                                            const std::vector<Obstacle>& walls) {
   const Obstacle p = active.item[si];
   const Obstacle cyl = active.item[ci];
   const double Rc = cyl.R;
-  double phi = std::atan2(x.y(), x.x());
-  const double start = phi;
-  const double sign = d.dot(Vec3(-std::sin(phi), std::cos(phi), 0.0)) >= 0.0 ? 1.0 : -1.0;
+  WallPath path;
+  path.start = std::atan2(x.y(), x.x());
+  const double sign = d.dot(Vec3(-std::sin(path.start), std::cos(path.start), 0.0)) >= 0.0 ? 1.0 : -1.0;
+  path.step = sign * 0.05 * r / Rc;
+  path.radius = Rc;
+  path.walls = {walls[0]};
   const double zside = x.z() >= p.c.z() ? 1.0 : -1.0;
   auto at = [&](double f) -> std::pair<Vec3, bool> {
     Vec3 P(Rc * std::cos(f), Rc * std::sin(f), 0.0);
@@ -270,86 +376,22 @@ bool Deposition::Impl::roll_along_cylinder(Vec3& x, double r, Contacts& active, 
     P.z() = p.c.z() + zside * std::sqrt(s);
     return {P, true};
   };
-  const Vec3 z = Vec3::UnitZ();
-  const double gap_tol = 1e-12 * r;
-  // 0: continue; 1: new contact; 2: lift off p; 3: lift off the wall; 4: lowest point passed.
-  std::vector<Obstacle> candidates;
-  auto condition = [&](double f) -> int {
-    auto [P, ok] = at(f);
-    if (!ok) return 2;
-    for (const Obstacle& o : candidates)
-      if (overlaps(o, P, gap_tol) && !active.has(o.key)) return 1;
-    if (walls[0].gap(P) < -gap_tol) return 1;
+  auto ends = [](double, bool on) { return on ? 0 : 2; };
+  auto tangent = [&](double f, const Vec3& P, Vec3& T) {
     // Height change along the motion: dz/dphi = zside * (ds/dphi) / (2 sqrt(s)).
     const Vec3 dPh(-Rc * std::sin(f), Rc * std::cos(f), 0.0);
     const double s = p.R * p.R - (P.head<2>() - p.c.head<2>()).squaredNorm();
     const double dz = zside * (-(P.head<2>() - p.c.head<2>()).dot(dPh.head<2>())) / std::sqrt(std::max(s, 1e-300));
     if (sign * dz > 0.0) return 4;
-    const Vec3 T = Vec3(sign * dPh.x(), sign * dPh.y(), sign * dz).normalized();
-    const Vec3 g_perp = z - z.dot(T) * T;
-    const Vec3 np = p.normal(P), nc = cyl.normal(P);
-    if (unloads(g_perp, np, nc)) return 2;
-    if (unloads(g_perp, nc, np)) return 3;
+    T = Vec3(sign * dPh.x(), sign * dPh.y(), sign * dz).normalized();
     return 0;
-  };
-  const double step = sign * 0.05 * r / Rc;
-  const double reach = 2.0 * r + 2.0 * r_max;
-  // What a step could pass between its samples (the candidates not in contact, and the floor).
-  std::vector<Obstacle> partners;
-  auto point = [&](double f) {
-    const auto [P, ok] = at(f);
-    return ok ? P : Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   };
   auto spread = [&](double f, double h) {
     const double q = std::hypot(Rc * std::cos(f) - p.c.x(), Rc * std::sin(f) - p.c.y());
     return tube_path_spread(Rc, h, q, p.R * p.R - q * q);
   };
-  for (int chunk = 0; chunk < 1000; ++chunk) {
-    candidates.clear();
-    const Vec3 here = at(phi).first;
-    grid.visit_box(here - Vec3::Constant(reach + 20 * std::abs(step) * Rc),
-                   here + Vec3::Constant(reach + 20 * std::abs(step) * Rc),
-                   [&](std::int32_t i, const Vec3& c, double radius, int image) {
-                     if (can_meet_on(p, c, r + radius)) candidates.push_back(sphere(i, c, radius, image, r));
-                   });
-    partners.clear();
-    for (const Obstacle& o : candidates)
-      if (!active.has(o.key)) partners.push_back(o);
-    partners.push_back(walls[0]);
-    for (int k = 0; k < 20; ++k) {
-      double f1 = phi + step;
-      if (condition(f1) == 0) {
-        const double touching = phi == start ? kTouching * r : -std::numeric_limits<double>::infinity();
-        const double graze = first_graze(phi, f1, point(phi), point(f1), partners, kGrazeDepth * r, touching, point, spread);
-        if (std::isnan(graze)) {
-          phi = f1;
-          continue;
-        }
-        f1 = graze;  // a partner entered and left between the samples: its entry lies in (phi, graze]
-      }
-      double f0 = phi;
-      for (int it = 0; it < 200 && std::abs(f1 - f0) > 1e-15; ++it) {
-        const double fm = 0.5 * (f0 + f1);
-        (condition(fm) == 0 ? f0 : f1) = fm;
-      }
-      x = at(f0).first;
-      switch (condition(f1)) {
-        case 1: {
-          const Vec3 P1 = at(f1).first;
-          for (const Obstacle& o : candidates)
-            if (o.gap(P1) < -gap_tol) active.add(o);
-          if (walls[0].gap(P1) < -gap_tol) active.add(walls[0]);
-          return false;
-        }
-        case 2: active.remove(si); return false;
-        case 3: active.remove(ci); return false;
-        case 4: return true;  // the lowest point of the curve
-        default: phi = f1; continue;
-      }
-    }
-  }
-  x = at(phi).first;
-  return false;
+  auto near = [](const Vec3&, double, const Vec3&, double) { return true; };
+  return walk_wall_path(x, r, active, si, ci, path, at, ends, tangent, spread, near);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -421,20 +463,26 @@ bool Deposition::Impl::drum_rest(const Vec3& x, const Contacts& active) const {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Roll on one grain while pressed against the drum wall (3D). As for the vertical cylinder, the path
-// (centre on the drum's centre surface at distance R_p from the support) is not a circle: it is
-// followed in small steps of the angle theta about the axis (height z_axis - R cos theta), each step
-// proven clear or searched (first_graze), each event located by bisection. y comes from the support:
-// y = y_p +- sqrt(R_p^2 - (x - x_p)^2 - (z - z_p)^2).
-// The path goes down, towards theta = 0; it ends at theta = 0 or where the two branches meet (y = y_p),
-// the lowest point of the closed curve. Returns true when the grain comes to rest there.
+// Roll on one grain while pressed against the drum wall (3D): the walk along its curve (centre on the drum's centre
+// surface at distance R_p from the support) by the angle theta about the axis (height z_axis - R cos theta).
+// y comes from the support: y = y_p +- sqrt(R_p^2 - (x - x_p)^2 - (z - z_p)^2). The path goes down, towards
+// theta = 0; it ends at theta = 0 or where the two branches meet (y = y_p), the lowest point of the closed curve.
+// Returns true when the grain comes to rest there.
 bool Deposition::Impl::roll_along_drum(Vec3& x, double r, Contacts& active, int si, int di, const Vec3& d,
                                        const std::vector<Obstacle>& walls) {
   const Obstacle p = active.item[si];
   const Obstacle drum = active.item[di];
   const double Rc = drum.R, za = drum.c.z();
-  double theta = std::atan2(x.x(), za - x.z());
-  const double start = theta, sign = theta > 0.0 ? -1.0 : 1.0;
+  WallPath path;
+  path.start = std::atan2(x.x(), za - x.z());
+  const double sign = path.start > 0.0 ? -1.0 : 1.0;
+  path.step = sign * 0.05 * r / Rc;
+  path.radius = Rc;
+  // Where the branches meet, y = y_p +- sqrt(s) turns s's round-off into up to ~1e-6 r of y: the path's start can
+  // lie a hair into an end wall the grain touches, or off the path, s < 0.
+  path.start_off_curve = true;
+  for (const Obstacle& w : walls)
+    if (w.key != drum.key && !w.is_floor()) path.walls.push_back(w);
   // The branch the grain is on; where the branches meet (y = y_p, up to round-off), the one the descent
   // takes (switching branch there moves the grain by at most 2e-8 r, along the contact with p).
   const double dy0 = x.y() - p.c.y();
@@ -446,97 +494,24 @@ bool Deposition::Impl::roll_along_drum(Vec3& x, double r, Contacts& active, int 
     P.y() = p.c.y() + yside * std::sqrt(s);
     return {P, true};
   };
-  const Vec3 z = Vec3::UnitZ();
-  const double gap_tol = 1e-12 * r;
-  std::vector<Obstacle> candidates;
-  // 0: continue; 1: new contact; 2: lift off p; 3: lift off the drum; 4: lowest point passed.
-  auto condition = [&](double f) -> int {
-    auto [P, ok] = at(f);
-    if (!ok) return 4;
-    if (sign * f > 0.0) return 4;
-    for (const Obstacle& o : candidates)
-      if (overlaps(o, P, gap_tol) && !active.has(o.key)) return 1;
-    for (const Obstacle& w : walls)
-      if (w.key != drum.key && !w.is_floor() && w.gap(P) < -gap_tol) return 1;
+  auto ends = [&](double f, bool on) { return !on || sign * f > 0.0 ? 4 : 0; };
+  auto tangent = [&](double f, const Vec3& P, Vec3& T) {
     const double s = p.R * p.R - (P.x() - p.c.x()) * (P.x() - p.c.x()) - (P.z() - p.c.z()) * (P.z() - p.c.z());
     const double dx = Rc * std::cos(f), dz = Rc * std::sin(f);
     const double dy = -yside * ((P.x() - p.c.x()) * dx + (P.z() - p.c.z()) * dz) / std::sqrt(std::max(s, 1e-300));
-    const Vec3 T = Vec3(sign * dx, sign * dy, sign * dz).normalized();
-    const Vec3 g_perp = z - z.dot(T) * T;
-    const Vec3 np = p.normal(P), nc = drum.normal(P);
-    if (unloads(g_perp, np, nc)) return 2;
-    if (unloads(g_perp, nc, np)) return 3;
+    T = Vec3(sign * dx, sign * dy, sign * dz).normalized();
     return 0;
-  };
-  const double step = sign * 0.05 * r / Rc;
-  const double reach = 2.0 * r + 2.0 * r_max;
-  // What a step could pass between its samples (the candidates not in contact, and the end walls).
-  std::vector<Obstacle> partners;
-  auto point = [&](double f) {
-    const auto [P, ok] = at(f);
-    return ok ? P : Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   };
   auto spread = [&](double f, double h) {
     const double q = std::hypot(Rc * std::sin(f) - p.c.x(), za - Rc * std::cos(f) - p.c.z());
     return tube_path_spread(Rc, h, q, p.R * p.R - q * q);
   };
-  for (int chunk = 0; chunk < 1000; ++chunk) {
-    candidates.clear();
-    // The first chunk from x itself: at(start) may be off the path where the branches meet (s < 0).
-    const Vec3 here = chunk == 0 ? x : at(theta).first;
-    // In x-z the centre stays on the drum's circle, within `travel` of here for the chunk's 20 steps.
-    const double travel = 20 * std::abs(step) * Rc;
-    const Vec3 span = Vec3::Constant(reach + travel);
-    grid.visit_box(here - span, here + span, [&](std::int32_t i, const Vec3& c, double radius, int image) {
-      const double dx = c.x() - here.x(), dz = c.z() - here.z(), near = (r + radius + travel) * (1.0 + 1e-9);
-      if (dx * dx + dz * dz < near * near && can_meet_on(p, c, r + radius))
-        candidates.push_back(sphere(i, c, radius, image, r));
-    });
-    partners.clear();
-    for (const Obstacle& o : candidates)
-      if (!active.has(o.key)) partners.push_back(o);
-    for (const Obstacle& w : walls)
-      if (w.key != drum.key && !w.is_floor()) partners.push_back(w);
-    for (int k = 0; k < 20; ++k) {
-      double f1 = theta + step;
-      if (condition(f1) == 0) {
-        // The path's first point may lie off it where the branches meet: the grain's own centre stands for it.
-        const Vec3 from = theta == start ? x : point(theta);
-        const double touching = theta == start ? kTouching * r : -std::numeric_limits<double>::infinity();
-        const double graze = first_graze(theta, f1, from, point(f1), partners, kGrazeDepth * r, touching, point, spread);
-        if (std::isnan(graze)) {
-          theta = f1;
-          continue;
-        }
-        f1 = graze;  // a partner entered and left between the samples: its entry lies in (theta, graze]
-      }
-      double f0 = theta;
-      for (int it = 0; it < 200 && std::abs(f1 - f0) > 1e-15; ++it) {
-        const double fm = 0.5 * (f0 + f1);
-        (condition(fm) == 0 ? f0 : f1) = fm;
-      }
-      // No progress: the grain stays where it is. (Where the branches meet, y = y_p +- sqrt(s) turns s's
-      // round-off into up to ~1e-6 r of y: the path's start can lie a hair into an end wall the grain touches,
-      // or off the path, s < 0.)
-      if (f0 != start) x = at(f0).first;
-      switch (condition(f1)) {
-        case 1: {
-          const Vec3 P1 = at(f1).first;
-          for (const Obstacle& o : candidates)
-            if (o.gap(P1) < -gap_tol) active.add(o);
-          for (const Obstacle& w : walls)
-            if (w.key != drum.key && !w.is_floor() && w.gap(P1) < -gap_tol) active.add(w);
-          return false;
-        }
-        case 2: active.remove(si); return false;
-        case 3: active.remove(di); return false;
-        case 4: return true;  // the lowest point of the curve
-        default: theta = f1; continue;
-      }
-    }
-  }
-  x = at(theta).first;
-  return false;
+  // In x-z the centre stays on the drum's circle, within `travel` of here for a stretch's 20 steps.
+  auto near = [](const Vec3& c, double R, const Vec3& here, double travel) {
+    const double dx = c.x() - here.x(), dz = c.z() - here.z(), reach = (R + travel) * (1.0 + 1e-9);
+    return dx * dx + dz * dz < reach * reach;
+  };
+  return walk_wall_path(x, r, active, si, di, path, at, ends, tangent, spread, near);
 }
 
 // ---------------------------------------------------------------------------------------------
