@@ -208,19 +208,26 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
       coarser_step_3d(c.scene, kSettleTimestepFraction3d,
                       "btr settle: the settled beds' packing fraction and coordination are those at 0.2 (to 1e-4 and "
                       "0.02, 8 beds in LIGGGHTS, 1 in YADE) for 0.66-0.94x the relaxation's time (docs/guide/settle.md)");
-  const double compaction_damping = yade ? kYadeCompactionDamping : kCompactionDamping;
+  const double compaction_damping = yade ? yade_compaction_damping(depth) : kCompactionDamping;
   c.settings.compaction_damping = compaction_damping;
-  const bool measured_depth = depth >= 0.75 * kDampingAnchorDepth && depth <= kDeepBedDepth;
   const std::string depth_text = g6(depth) + " largest diameters";
+  std::string damping_from;
+  if (yade) {
+    const bool between = depth >= kYadeShallowDepth && depth <= kDampingAnchorDepth;
+    damping_from = "btr settle's YADE compaction damping, measured against YADE's own pours of bed3d's grains at " +
+                   g6(kDampingAnchorDepth) + " largest diameters deep (" + g6(kYadeCompactionDamping) + ") and " +
+                   g6(kYadeShallowDepth) + " (" + g6(kYadeShallowCompactionDamping) + "), linear between (this bed: " +
+                   depth_text + (between ? ")" : ", outside them: the nearer one's value, not measured there)");
+  } else {
+    const bool measured_depth = depth >= 0.75 * kDampingAnchorDepth && depth <= kDeepBedDepth;
+    damping_from = "btr settle's LIGGGHTS compaction damping, measured against the engine's own pours of bed3d at " +
+                   g6(kDampingAnchorDepth) + " largest diameters deep (this bed: " + depth_text +
+                   (measured_depth ? ")" : ", away from that depth: not measured there)");
+  }
   c.record = {
       {"target_phi", {{"value", target_phi}, {"from", target_from}}},
       {"compaction_damping",
-       {{"value", compaction_damping},
-        {"bed_depth_largest_diameters", depth},
-        {"from", std::string("btr settle's ") + (yade ? "YADE" : "LIGGGHTS") +
-                     " compaction damping, measured against the engine's own pours of bed3d at " +
-                     g6(kDampingAnchorDepth) + " largest diameters deep (this bed: " + depth_text +
-                     (measured_depth ? ")" : ", away from that depth: not measured there)")}}},
+       {{"value", compaction_damping}, {"bed_depth_largest_diameters", depth}, {"from", damping_from}}},
       {"compaction_timestep_fraction",
        {{"value", kSettleCompactionTimestepFraction},
         {"from", "btr settle: twice the scene's usual 0.2, measured on bed3d to give the same structure"}}},
@@ -247,6 +254,13 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
   const std::string warning = settle_depth_warning(depth, c.settings.compaction_slabs, yade);
   if (!warning.empty()) c.record["compaction_damping"]["warning"] = warning;
   return c;
+}
+
+double yade_compaction_damping(double depth) {
+  if (!(depth > kYadeShallowDepth)) return kYadeShallowCompactionDamping;
+  if (depth >= kDampingAnchorDepth) return kYadeCompactionDamping;
+  const double t = (depth - kYadeShallowDepth) / (kDampingAnchorDepth - kYadeShallowDepth);
+  return kYadeShallowCompactionDamping + t * (kYadeCompactionDamping - kYadeShallowCompactionDamping);
 }
 
 int settle_compaction_slabs(double depth) {

@@ -112,8 +112,15 @@ int settle_compaction_slabs(double depth_in_largest_diameters);
 // LIGGGHTS' protocol (docs/guide/settle.md, "YADE's compaction damping against YADE's pours"): 2000 grains,
 // BTR seeds 1-3 relaxed to the pours' mean phi, mean Z 5.340 / 5.417 / 5.452 / 5.462 / 5.506 / 5.575 at
 // 0.3 / 0.4 / 0.45 / 0.5 / 0.6 / 0.7 against the pours' 5.421 +- 0.033; 0.4 lands on the mean and keeps every
-// seed within the reach. No depth rule has been measured for it.
+// seed within the reach.
 inline constexpr double kYadeCompactionDamping = 0.4;
+// YADE's shallower beds want more: the same grains 2 cm (9.4 largest diameters) deep, 1333 grains in the same cell,
+// BTR seeds 1-3 relaxed to their pours' mean phi, mean Z 5.350 / 5.386 / 5.487 / 5.515 / 5.559 at 0.4 / 0.5 / 0.6 /
+// 0.7 / 0.8 against the pours' 5.456 +- 0.072; the least-squares line crosses it at 0.59, so 0.6.
+inline constexpr double kYadeShallowDepth = 9.4, kYadeShallowCompactionDamping = 0.6;
+// YADE's compaction damping for a bed `depth` largest diameters deep: linear between the two depths it was measured
+// at (kYadeShallowDepth, kDampingAnchorDepth), the nearer one's value outside them (settle.json says so).
+double yade_compaction_damping(double depth_in_largest_diameters);
 // The compaction's step as a fraction of the Rayleigh / contact time: twice the settle's 0.2, the setting
 // measured to give the same structure for 0.65x the processor time (coupling/README.md, "The compaction's time
 // step").

@@ -204,14 +204,25 @@ TEST(SettlePlan, CompactionDampingIsTheMeasuredValueAndSaysWhereItWasMeasured) {
   const std::string near = settle_choices(s, 0.63, {}, 15.0).record["compaction_damping"]["from"];
   EXPECT_EQ(near.find("not measured"), std::string::npos) << near;
   EXPECT_NE(near.find("this bed: 15 largest diameters"), std::string::npos) << near;
-  Scene y = s;  // YADE's value was measured at the same depth, and its record says so the same way
+}
+
+// YADE's value was measured at two depths, 0.4 at 14.1 largest diameters and 0.6 at 9.4: linear between, the
+// nearer value outside, and the record says when the bed lies outside them.
+TEST(SettlePlan, YadeCompactionDampingFollowsTheBedsDepthBetweenTheTwoMeasured) {
+  Scene y = bed(3);
   y.relax.engine = "yade";
-  EXPECT_EQ(*settle_choices(y, 0.63, {}, 9.4).settings.compaction_damping, kYadeCompactionDamping);
-  const std::string yade_away = settle_choices(y, 0.63, {}, 9.4).record["compaction_damping"]["from"];
-  EXPECT_NE(yade_away.find("YADE"), std::string::npos) << yade_away;
-  EXPECT_NE(yade_away.find("not measured there"), std::string::npos) << yade_away;
-  const std::string yade_near = settle_choices(y, 0.63, {}, 14.1).record["compaction_damping"]["from"];
-  EXPECT_EQ(yade_near.find("not measured"), std::string::npos) << yade_near;
+  auto damping = [&](double depth) { return *settle_choices(y, 0.63, {}, depth).settings.compaction_damping; };
+  auto from = [&](double depth) -> std::string { return settle_choices(y, 0.63, {}, depth).record["compaction_damping"]["from"]; };
+  EXPECT_DOUBLE_EQ(damping(14.1), 0.4);
+  EXPECT_DOUBLE_EQ(damping(9.4), 0.6);
+  EXPECT_NEAR(damping(0.5 * (9.4 + 14.1)), 0.5, 1e-12);  // half way: half way
+  EXPECT_NEAR(damping(9.7), 0.6 - 0.2 * 0.3 / 4.7, 1e-12);
+  EXPECT_DOUBLE_EQ(damping(42.3), 0.4);
+  EXPECT_DOUBLE_EQ(damping(5.0), 0.6);
+  EXPECT_NE(from(9.7).find("YADE"), std::string::npos) << from(9.7);
+  EXPECT_EQ(from(9.7).find("not measured"), std::string::npos) << from(9.7);
+  EXPECT_NE(from(5.0).find("not measured there"), std::string::npos) << from(5.0);
+  EXPECT_NE(from(42.3).find("not measured there"), std::string::npos) << from(42.3);
 }
 
 // A bed deeper than 1.5x the depth settle was measured at gets a warning naming its depth, in settle.json too;
