@@ -275,8 +275,8 @@ bool Deposition::Impl::walk_wall_path(Vec3& x, double r, Contacts& active, int s
   const double gap_tol = 1e-12 * r;
   // 0: continue; 1: new contact; 2: lift off p; 3: lift off the wall; 4: lowest point passed.
   std::vector<Obstacle> candidates;
-  auto condition = [&](double f) -> int {
-    auto [P, ok] = at(f);
+  // The step's test at angle f, the centre there being P (on: f is on the curve).
+  auto condition_at = [&](double f, const Vec3& P, bool ok) -> int {
     if (const int end = ends(f, ok)) return end;
     for (const Obstacle& o : candidates)
       if (overlaps(o, P, gap_tol) && !active.has(o.key)) return 1;
@@ -290,6 +290,10 @@ bool Deposition::Impl::walk_wall_path(Vec3& x, double r, Contacts& active, int s
     if (unloads(g_perp, nw, np)) return 3;
     return 0;
   };
+  auto condition = [&](double f) {
+    const auto [P, ok] = at(f);
+    return condition_at(f, P, ok);
+  };
   // What a step could pass between its samples (the candidates not in contact, and the walls).
   std::vector<Obstacle> partners;
   auto point = [&](double f) {
@@ -299,6 +303,8 @@ bool Deposition::Impl::walk_wall_path(Vec3& x, double r, Contacts& active, int s
   const double step = path.step;
   const double reach = 2.0 * r + 2.0 * r_max;
   double f = path.start;
+  // The centre at f, where the step from f starts: where the start lies off the curve, x stands for it.
+  Vec3 Pf = path.start_off_curve ? x : point(f);
   for (int chunk = 0; chunk < 1000; ++chunk) {
     candidates.clear();
     // Where the start lies off the curve (the drum's branches meeting), the first stretch from x itself.
@@ -315,13 +321,13 @@ bool Deposition::Impl::walk_wall_path(Vec3& x, double r, Contacts& active, int s
     for (const Obstacle& w : path.walls) partners.push_back(w);
     for (int k = 0; k < 20; ++k) {
       double f1 = f + step;
-      if (condition(f1) == 0) {
-        const bool first = f == path.start;
-        const Vec3 from = first && path.start_off_curve ? x : point(f);
-        const double touching = first ? kTouching * r : -std::numeric_limits<double>::infinity();
-        const double graze = first_graze(f, f1, from, point(f1), partners, kGrazeDepth * r, touching, point, spread);
+      const auto [P1, on1] = at(f1);
+      if (condition_at(f1, P1, on1) == 0) {  // then f1 is on the curve (ends(f1, false) is an end)
+        const double touching = f == path.start ? kTouching * r : -std::numeric_limits<double>::infinity();
+        const double graze = first_graze(f, f1, Pf, P1, partners, kGrazeDepth * r, touching, point, spread);
         if (std::isnan(graze)) {
           f = f1;
+          Pf = P1;
           continue;
         }
         f1 = graze;  // a partner entered and left between the samples: its entry lies in (f, graze]
@@ -345,7 +351,10 @@ bool Deposition::Impl::walk_wall_path(Vec3& x, double r, Contacts& active, int s
         case 2: active.remove(si); return false;
         case 3: active.remove(wi); return false;
         case 4: return true;  // the lowest point of the curve
-        default: f = f1; continue;
+        default:
+          f = f1;
+          Pf = point(f1);
+          continue;
       }
     }
   }
