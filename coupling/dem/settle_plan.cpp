@@ -5,6 +5,7 @@
 
 #include "btr/model/number_text.h"
 #include "btr/placement/drops.h"
+#include "coupling/dem/materials.h"
 #include "coupling/dem/preload.h"
 #include "coupling/dem/relax_plan.h"
 #include "coupling/dem/relax_target.h"
@@ -65,6 +66,12 @@ void check_settle_scene(const Scene& scene) {
         refuse_scene_field(scene, "source.kind",
                "rain into a Hele-Shaw cell: the plates set the packing across the whole gap, which the periodic "
                "calibration cell does not have; pour the cell's heaps from a point or region source");
+      // Before the deposit and the calibration pour: the relaxation would refuse it only after them (relax.cpp).
+      if (scene.relax.engine == "yade" && uses_rolling_friction(scene))
+        refuse_scene_field(scene, "material.rolling_friction",
+               "a bed is compacted to its target with its friction scaled down, and YADE's Hertz-Mindlin moment law "
+               "takes its rolling friction once for every contact, so it cannot be scaled with it; settle this bed "
+               "with LIGGGHTS (--engine liggghts), or without rolling friction");
       return;  // an open floor has no rain (the scene refuses it)
     case SourceSpec::Kind::Region:
       if (scene.dimension == 3 && kind != ContainerKind::HeleShaw)

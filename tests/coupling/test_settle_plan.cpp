@@ -415,6 +415,26 @@ TEST(SettlePlan, RefusesHeapsOfLinearContactsWhoseAngleFollowsTheStiffness) {
   }
 }
 
+// YADE cannot scale rolling friction in a bed's compaction: refused before any work, not after the calibration pour.
+// LIGGGHTS serves the same bed, and YADE serves a heap of those grains (its relaxation has no compaction).
+TEST(SettlePlan, RefusesABedWithRollingFrictionInYadeBeforeTheCalibration) {
+  Scene s = bed(3);
+  s.grains.components[0].material.rolling_friction = 0.05;
+  s.relax.engine = "yade";
+  const std::string why = refusal(s);
+  EXPECT_EQ(why.rfind("/scenes/bed.toml: material.rolling_friction: ", 0), 0u) << why;
+  EXPECT_NE(why.find("--engine liggghts"), std::string::npos) << why;
+  s.relax.engine = "liggghts";
+  EXPECT_EQ(refusal(s), "");
+  s.relax.engine = "yade";
+  s.container.kind = ContainerKind::Open;
+  s.source.kind = SourceSpec::Kind::Point;
+  EXPECT_EQ(refusal(s), "");
+  s = bed(3);
+  s.relax.engine = "yade";
+  EXPECT_EQ(refusal(s), "");
+}
+
 TEST(SettlePlan, HeapChoicesHoldTheShapeQuasiStatically) {
   Scene s = bed(3);
   const SettleChoices c = heap_settle_choices(s, 21.0, {{"source", "calibration pour"}});
