@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "btr/placement/mesh_walker.h"
+#include "btr/placement/path_graze.h"
 
 namespace btr {
 namespace mesh_walk {
@@ -112,6 +113,56 @@ bool Walker::roll_off_top(const Vec3& x, Vec3& d, std::uint64_t salt) const {
   return false;
 }
 
+// The step from x (s = 0) along d by h, each point projected onto the contacts (project): the first s in (0, sb]
+// where a partner not in contact is entered deeper than 1e-9 r (the self-check's overlap tolerance; a shallower
+// graze is a tangency), between x and xb (the point at sb), both clear; NaN when every partner is proven clear
+// there (first_graze_of, btr/placement/path_graze.h). Partners within 1e-9 r at x or xb are left out: the
+// triangles sharing a contact's edge or vertex touch the grain along the whole step, and the partner a
+// bisected step meets is touched at its end.
+// - Travel: the centre moves at most kPathSpeed h |ds| over ds. The line x + s h d lies outside the reach of
+//   each contact (a convex set: a grain's sphere, a face's slab, an edge's cylinder, a vertex's sphere), and
+//   the projection onto one of them, or onto the circle where two spheres, or a sphere and a face, meet,
+//   shortens distances; Newton's projection onto the other curves of two contacts (an edge's cylinder with a
+//   second contact) lies within O(h^2) of that, which the margin covers (32 samples of every step of the tall
+//   hopper's 1e5 grains, docs/mesh: at most 1.0000001).
+// - Sag: a partner's gap g(s) has g'' = P'^T H P' + grad g . P'', H the Hessian of the distance to a grain's
+//   centre or a triangle, at most 1 / (r + g) <= 1 / (0.9 r) where the ends are clear (g >= -0.055 r between
+//   them), and |P''| at most h^2 kappa, kappa the path's curvature: a contact's normal curvature on one (1 / R
+//   on a grain, R = r + r_j; 1 / r about an edge or a vertex; 0 over a face; the exact second derivative is
+//   h^2 / R at most there), and the sum of the two's over sin(theta) on two, theta the angle between their
+//   normals (0 for two faces: a straight groove); taken twice over for the parameter's uneven speed.
+double Walker::step_graze(const Vec3& x, const Vec3& xb, double h, const Vec3& d, double sb) const {
+  constexpr double kPathSpeed = 1.1;
+  auto gap_of = [&](const Partner& q, const Vec3& p) {
+    return has(q.key) ? std::numeric_limits<double>::infinity() : gap(q, p);
+  };
+  auto at = [&](double s) {
+    Vec3 p = x + s * h * d;
+    return project(p) ? p : Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
+  };
+  auto spread = [&](double, double ds) { return kPathSpeed * h * std::abs(ds); };
+  // A contact's normal curvature: a grain's 1 / R; a triangle's 0 where the grain lies over its face at both
+  // ends (the slab between is convex), 1 / r about an edge or a vertex.
+  auto bend = [&](const Partner& a) {
+    if (a.tri < 0) return 1.0 / a.R;
+    const Vec3& n = e.mesh.normal(a.tri);
+    const bool face = std::abs(normal(a, x).dot(n)) >= 1.0 - 1e-12 && std::abs(normal(a, xb).dot(n)) >= 1.0 - 1e-12;
+    return face ? 0.0 : 1.0 / r;
+  };
+  double kappa = bend(active[0]);
+  if (active.size() == 2) {
+    // The normals turn by at most the travel over r along the step.
+    const double sin_low = std::min(normal(active[0], x).cross(normal(active[1], x)).norm(),
+                                    normal(active[0], xb).cross(normal(active[1], xb)).norm()) -
+                           2.0 * kPathSpeed * h * sb / r;
+    kappa += bend(active[1]);
+    if (kappa > 0.0) kappa = sin_low > 0.0 ? kappa / sin_low : std::numeric_limits<double>::infinity();
+  }
+  const double M = h * h * (kPathSpeed * kPathSpeed / (0.9 * r) + 2.0 * kappa);
+  auto sag = [&](double lo, double hi) { return M * (hi - lo) * (hi - lo) / 8.0; };
+  return first_graze_of(0.0, sb, x, xb, near, gap_of, 1e-9 * r, 1e-9 * r, at, spread, sag);
+}
+
 Vec3 Walker::place(Vec3 x) {
   const double tol = 1e-10 * r;  // a gap below -tol is an entry into a partner
   const double h_max = 0.1 * r;
@@ -156,8 +207,8 @@ Vec3 Walker::place(Vec3 x) {
       continue;
     }
     // The first point of the step where a partner is entered (1), a support unloads (2) or the contacts
-    // cannot be kept (3). Inside a blocked step only the partners entered at its end are watched (one
-    // entered and left again within a step of r/10 would be a graze of depth ~1e-3 r at most).
+    // cannot be kept (3). Inside a blocked step the bisection watches the partners entered at its end; one
+    // entered and left again before it is found by the graze search.
     const std::vector<Partner>* watched = &near;
     auto blocked = [&](double s, Vec3& p) {
       p = x + s * h * d;
@@ -171,17 +222,25 @@ Vec3 Walker::place(Vec3 x) {
     };
     Vec3 p1;
     int why = blocked(1.0, p1);
+    double s1 = 1.0;
     if (why == 0) {
-      x = p1;
-      h = std::min(h_max, 2.0 * h);
-      continue;
+      // Both ends clear: a partner entered and left between them is found by the graze search, which then
+      // stands for the step's end (its own test there decides).
+      s1 = step_graze(x, p1, h, d, 1.0);
+      if (std::isnan(s1)) {
+        x = p1;
+        h = std::min(h_max, 2.0 * h);
+        continue;
+      }
+      why = blocked(s1, p1);
     }
     entering.clear();
     if (why == 1)
       for (const Partner& q : near)
         if (!has(q.key) && gap(q, p1) < -tol) entering.push_back(q);
     watched = &entering;
-    double s0 = 0.0, s1 = 1.0;
+    double s_end = s1;
+    double s0 = 0.0;
     Vec3 p0 = x;
     auto bisect = [&] {
       for (int it = 0; it < 60; ++it) {
@@ -193,14 +252,19 @@ Vec3 Walker::place(Vec3 x) {
       }
     };
     bisect();
-    // A partner the step only grazed (entered and left before its end) may hold the point found: then
-    // again, watching every partner near, so the grain stops where it first meets one.
+    // A partner the step only grazed (entered and left before the point found) may hold that point, or lie
+    // between it and the step's start (the graze search): then again, watching every partner near, so the
+    // grain stops where it first meets one.
     bool grazed = false;
     for (const Partner& q : near) grazed |= !has(q.key) && gap(q, p0) < -tol;
+    if (!grazed && s0 > 0.0) {
+      const double s = step_graze(x, p0, h, d, s0);
+      if (!std::isnan(s)) grazed = true, s_end = s;
+    }
     if (grazed) {
       watched = &near;
-      s0 = 0.0, s1 = 1.0, p0 = x;
-      why = blocked(1.0, p1);
+      s0 = 0.0, s1 = s_end, p0 = x;
+      why = blocked(s_end, p1);
       bisect();
     }
     x = p0;

@@ -1,11 +1,12 @@
 #pragma once
-// A path followed in steps (the curve along a cylinder or drum wall, btr/placement/deposition.cpp) sees a
-// partner only where a sample lies inside it: one the path enters and leaves between two samples would be
+// A path followed in steps (the curve along a cylinder or drum wall, btr/placement/deposition.cpp; the mesh
+// walker's steps, btr/placement/mesh_placement.cpp) sees a partner only where a sample lies inside it: one the path enters and leaves between two samples would be
 // passed. Between two samples that are both clear, this search proves each partner clear or finds a point
 // inside one. A partner's gap is 1-Lipschitz in the centre, so partner o stays clear (to `depth`) over [a, b] when
 //   gap_o(P(a)) >= spread(a, b - a) - depth  or  gap_o(P(b)) >= spread(b, a - b) - depth,
-// with spread(f, h) a bound on how far the centre moves from P(f) while the angle runs over h. Spans that
-// cannot be cleared are split, leftmost first, down to spans of 1e-15 rad.
+// with spread(f, h) a bound on how far the centre moves from P(f) while the path's parameter (an angle, a
+// fraction of a step) runs over h. Spans that cannot be cleared are split, leftmost first, down to 1e-15.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -34,21 +35,25 @@ inline bool clear_from(const Obstacle& o, const Vec3& P, double spread, double d
   return o.gap(P) >= need;
 }
 
-template <class At, class Spread>
-double graze_in(double lo, double hi, const Vec3& Plo, const Vec3& Phi, const std::vector<const Obstacle*>& partners,
-                double depth, At& at, Spread& spread) {
-  const double Dlo = spread(lo, hi - lo), Dhi = spread(hi, lo - hi);
-  std::vector<const Obstacle*> open;
-  for (const Obstacle* o : partners)
-    if (!clear_from(*o, Plo, Dlo, depth) && !clear_from(*o, Phi, Dhi, depth)) open.push_back(o);
+// clear(item, Plo, Phi, Dlo, Dhi, S): item is proven clear (to depth) over the span whose ends are Plo and Phi,
+// the centre's travel from them bounded by Dlo and Dhi, and S = sag(lo, hi) (below); inside(item, P): its gap
+// is below -depth. A midpoint off the path (NaN) is returned as found: the caller's own test there decides.
+template <class Item, class Clear, class Inside, class At, class Spread, class Sag>
+double graze_in(double lo, double hi, const Vec3& Plo, const Vec3& Phi, const std::vector<const Item*>& partners,
+                Clear& clear, Inside& inside, At& at, Spread& spread, Sag& sag) {
+  const double Dlo = spread(lo, hi - lo), Dhi = spread(hi, lo - hi), S = sag(lo, hi);
+  std::vector<const Item*> open;
+  for (const Item* o : partners)
+    if (!clear(*o, Plo, Phi, Dlo, Dhi, S)) open.push_back(o);
   if (open.empty() || std::abs(hi - lo) <= 1e-15 * std::max(1.0, std::abs(lo))) return std::nan("");
   const double m = 0.5 * (lo + hi);
   const Vec3 Pm = at(m);
-  const double left = graze_in(lo, m, Plo, Pm, open, depth, at, spread);
+  if (!Pm.allFinite()) return m;
+  const double left = graze_in(lo, m, Plo, Pm, open, clear, inside, at, spread, sag);
   if (!std::isnan(left)) return left;
-  for (const Obstacle* o : open)
-    if (o->gap(Pm) < -depth) return m;
-  return graze_in(m, hi, Pm, Phi, open, depth, at, spread);
+  for (const Item* o : open)
+    if (inside(*o, Pm)) return m;
+  return graze_in(m, hi, Pm, Phi, open, clear, inside, at, spread, sag);
 }
 
 }  // namespace detail
@@ -70,7 +75,34 @@ double first_graze(double a, double b, const Vec3& Pa, const Vec3& Pb, const std
     if (!detail::clear_from(o, Pa, Da, depth) && !detail::clear_from(o, Pb, Db, depth) && !(skip && o.gap(Pa) < touching))
       open.push_back(&o);
   if (open.empty()) return std::nan("");
-  return detail::graze_in(a, b, Pa, Pb, open, depth, at, spread);
+  auto clear = [depth](const Obstacle& o, const Vec3& Plo, const Vec3& Phi, double Dlo, double Dhi, double) {
+    return detail::clear_from(o, Plo, Dlo, depth) || detail::clear_from(o, Phi, Dhi, depth);
+  };
+  auto inside = [depth](const Obstacle& o, const Vec3& P) { return o.gap(P) < -depth; };
+  auto no_sag = [](double, double) { return 0.0; };
+  return detail::graze_in(a, b, Pa, Pb, open, clear, inside, at, spread, no_sag);
+}
+
+// The same search for partners of any kind, each with its gap: gap(item, P), 1-Lipschitz in P (the mesh
+// walker's grains and triangles, btr/placement/mesh_placement.cpp), with a second test: sag(lo, hi) bounds
+// how far a partner's gap can fall below the lower of its two ends' over [lo, hi] (a gap whose second
+// derivative along the path is at least -M falls at most M (hi - lo)^2 / 8 below the chord of its ends), which
+// clears a partner nearly level along the path (one the travel bound alone would clear only in many short
+// spans). Partners whose gap at a or at b is below `touching` are left out: the path starts or ends on them.
+template <class Item, class Gap, class At, class Spread, class Sag>
+double first_graze_of(double a, double b, const Vec3& Pa, const Vec3& Pb, const std::vector<Item>& partners, Gap gap,
+                      double depth, double touching, At at, Spread spread, Sag sag) {
+  auto clear = [&](const Item& o, const Vec3& Plo, const Vec3& Phi, double Dlo, double Dhi, double S) {
+    const double glo = gap(o, Plo), ghi = gap(o, Phi);
+    return glo >= Dlo - depth || ghi >= Dhi - depth || std::min(glo, ghi) >= S - depth;
+  };
+  const double Da = spread(a, b - a), Db = spread(b, a - b), S = sag(a, b);
+  std::vector<const Item*> open;
+  for (const Item& o : partners)
+    if (gap(o, Pa) >= touching && gap(o, Pb) >= touching && !clear(o, Pa, Pb, Da, Db, S)) open.push_back(&o);
+  if (open.empty()) return std::nan("");
+  auto inside = [&](const Item& o, const Vec3& P) { return gap(o, P) < -depth; };
+  return detail::graze_in(a, b, Pa, Pb, open, clear, inside, at, spread, sag);
 }
 
 }  // namespace btr

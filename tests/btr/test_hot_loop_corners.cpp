@@ -338,7 +338,9 @@ TEST(HotLoopCorners, WallPathGrazesAgreeWithDenseSampling) {
       EXPECT_LE(f, first + 1e-12) << "trial " << trial;  // the leftmost: the entry, not a later point inside
     } else {
       ++clear;
-      if (!std::isnan(f)) EXPECT_EQ(condition(f), 1) << "trial " << trial;  // a stretch between samples: real
+      if (!std::isnan(f)) {
+        EXPECT_EQ(condition(f), 1) << "trial " << trial;  // a stretch between samples: real
+      }
     }
   }
   EXPECT_GT(found, 40);

@@ -287,6 +287,38 @@ TEST(MeshPlacement, FallsOntoAnEdgeRollsOffItAndFallsToTheFloor) {
   EXPECT_LT((g.x - expect).norm(), 1e-7) << g.x.transpose() << " vs " << expect.transpose();
 }
 
+TEST(MeshPlacement, AGrainGrazedRollingOffAnEdgeIsMetBetweenTwoSteps) {
+  // The block and edge above. A grain o of radius 3 rests on the floor at (3.2, y_o) beside the block, its
+  // contact sphere (radius 4) reaching over the edge. The dropped grain rolls off the edge on the circle
+  // P(a) = (sin a, 0.3, H + cos a), a from 30 to 90 degrees, in steps of r/10 (samples 5.7 degrees apart),
+  // and comes nearest o at a* = atan2(3.2, 1) = 72.6 degrees, between the samples at 70.0 and 75.7, where its
+  // distance from o in the x-z plane is rho = |(3.2, 1)| - 1. o is set across (y) so that the path enters
+  // its sphere there by `depth` and both samples are 9e-4 clear. Met, o pushes the grain along the edge
+  // (-y) until a*, where o's constraint stops holding it (the distance grows past a*): the grain leaves o at
+  // y = y_o - sqrt(16 - rho^2) and falls to the floor beside the side there. Passed through, it would keep
+  // y = 0.3.
+  const double H = 2.0, L = 10, r = 1.0, ro = 3.0, xo = 3.2;
+  std::vector<Vec3> v = {{-L, -L, H}, {0, -L, H}, {0, L, H}, {-L, L, H}, {0, -L, 0}, {L, -L, 0}, {L, L, 0}, {0, L, 0}};
+  std::vector<std::array<int, 3>> t;
+  quad(t, 0, 1, 2, 3);
+  quad(t, 1, 4, 7, 2);
+  quad(t, 4, 5, 6, 7);
+  const HandMesh h = hand_mesh(v, t);
+  const double rho = std::hypot(xo, ro - H) - r;
+  for (const double depth : {1e-5, -1e-5}) {  // entered by 1e-5, or passed 1e-5 clear
+    const double yo = 0.3 + std::sqrt((r + ro - depth) * (r + ro - depth) - rho * rho);
+    Deposition dep(3, h.container, ro);
+    const Grain o = dep.place(drop_at(Vec3(xo, yo, 0) + h.shift, ro));
+    ASSERT_LT((o.x - (Vec3(xo, yo, ro) + h.shift)).norm(), 1e-12);
+    const Grain g = dep.place(drop_at(Vec3(0.5, 0.3, 0) + h.shift, r));
+    const double y = depth > 0.0 ? yo - std::sqrt((r + ro) * (r + ro) - rho * rho) : 0.3;
+    const Vec3 expect = Vec3(r, y, r) + h.shift;
+    EXPECT_LT((g.x - expect).norm(), 1e-9) << "depth " << depth << ": " << (g.x - h.shift).transpose();
+    const CheckReport rep = check_packing(dep.grains(), 3, h.container);
+    EXPECT_TRUE(rep.ok()) << rep.overlaps << " " << rep.unsupported << " " << rep.outside;
+  }
+}
+
 TEST(MeshPlacement, FallsOntoAVertexAndRollsOffIt) {
   // A square pyramid (apex 0 at height P) standing on a floor; a grain dropped a little off the apex
   // first touches the apex alone (|x - apex| = r), rolls off and comes to rest on the floor beside it.
