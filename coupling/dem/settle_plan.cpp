@@ -215,16 +215,24 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
       coarser_step_3d(c.scene, kSettleTimestepFraction3d,
                       "btr settle: the settled beds' packing fraction and coordination are those at 0.2 (to 1e-4 and "
                       "0.02, 8 beds in LIGGGHTS, 1 in YADE) for 0.66-0.94x the relaxation's time (docs/guide/settle.md)");
-  const double compaction_damping = yade ? yade_compaction_damping(depth) : kCompactionDamping;
+  // YADE's depth rule was measured on 3D beds; a 2D bed keeps bed3d's value (below).
+  const bool yade_3d = yade && scene.dimension == 3;
+  const double compaction_damping = !yade ? kCompactionDamping : yade_3d ? yade_compaction_damping(depth) : kYadeCompactionDamping;
   c.settings.compaction_damping = compaction_damping;
   const std::string depth_text = g6(depth) + " largest diameters";
   std::string damping_from;
-  if (yade) {
-    const bool between = depth >= kYadeShallowDepth && depth <= kDampingAnchorDepth;
+  if (yade && !yade_3d) {
+    damping_from = "btr settle's YADE compaction damping at bed3d's depth, " + g6(kDampingAnchorDepth) +
+                   " largest diameters (" + g6(kYadeCompactionDamping) + "): its depth rule, measured on 3D beds, "
+                   "is not used in 2D, where 0.4 landed the held-out 2D bed's coordination at 19.6 and 0.5 did not "
+                   "(docs/guide/settle.md; this bed: " + depth_text + ", not measured in 2D otherwise)";
+  } else if (yade) {
+    const bool between = depth >= kYadeShallowDepth && depth <= kYadeDeepDepth;
     damping_from = "btr settle's YADE compaction damping, measured against YADE's own pours of bed3d's grains at " +
-                   g6(kDampingAnchorDepth) + " largest diameters deep (" + g6(kYadeCompactionDamping) + ") and " +
-                   g6(kYadeShallowDepth) + " (" + g6(kYadeShallowCompactionDamping) + "), linear between (this bed: " +
-                   depth_text + (between ? ")" : ", outside them: the nearer one's value, not measured there)");
+                   g6(kYadeShallowDepth) + " largest diameters deep (" + g6(kYadeShallowCompactionDamping) + "), " +
+                   g6(kDampingAnchorDepth) + " (" + g6(kYadeCompactionDamping) + ") and " + g6(kYadeDeepDepth) + " (" +
+                   g6(kYadeDeepCompactionDamping) + "), linear between (this bed: " + depth_text +
+                   (between ? ")" : ", outside them: the nearer end's value, not measured there)");
   } else {
     const bool measured_depth = depth >= 0.75 * kDampingAnchorDepth && depth <= kDeepBedDepth;
     damping_from = "btr settle's LIGGGHTS compaction damping, measured against the engine's own pours of bed3d at " +
@@ -264,10 +272,15 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
 }
 
 double yade_compaction_damping(double depth) {
-  if (!(depth > kYadeShallowDepth)) return kYadeShallowCompactionDamping;
-  if (depth >= kDampingAnchorDepth) return kYadeCompactionDamping;
-  const double t = (depth - kYadeShallowDepth) / (kDampingAnchorDepth - kYadeShallowDepth);
-  return kYadeShallowCompactionDamping + t * (kYadeCompactionDamping - kYadeShallowCompactionDamping);
+  constexpr double depths[] = {kYadeShallowDepth, kDampingAnchorDepth, kYadeDeepDepth};
+  constexpr double dampings[] = {kYadeShallowCompactionDamping, kYadeCompactionDamping, kYadeDeepCompactionDamping};
+  if (!(depth > depths[0])) return dampings[0];
+  for (int i = 1; i < 3; ++i)
+    if (depth <= depths[i]) {
+      const double t = (depth - depths[i - 1]) / (depths[i] - depths[i - 1]);
+      return dampings[i - 1] + t * (dampings[i] - dampings[i - 1]);
+    }
+  return dampings[2];
 }
 
 int settle_compaction_slabs(double depth) {

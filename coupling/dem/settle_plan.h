@@ -118,8 +118,13 @@ inline constexpr double kYadeCompactionDamping = 0.4;
 // BTR seeds 1-3 relaxed to their pours' mean phi, mean Z 5.350 / 5.386 / 5.487 / 5.515 / 5.559 at 0.4 / 0.5 / 0.6 /
 // 0.7 / 0.8 against the pours' 5.456 +- 0.072; the least-squares line crosses it at 0.59, so 0.6.
 inline constexpr double kYadeShallowDepth = 9.4, kYadeShallowCompactionDamping = 0.6;
-// YADE's compaction damping for a bed `depth` largest diameters deep: linear between the two depths it was measured
-// at (kYadeShallowDepth, kDampingAnchorDepth), the nearer one's value outside them (settle.json says so).
+// And deeper ones too: 4.2 cm (19.7 largest diameters, 2800 grains in the same cell), mean Z 5.344 / 5.420 / 5.460 /
+// 5.480 / 5.526 at 0.3 / 0.4 / 0.5 / 0.6 / 0.7 against the pours' 5.509 +- 0.011; the least-squares line crosses it at
+// 0.65 +- 0.03 (docs/guide/settle.md, "A third depth for YADE"). Settle's single compaction serves beds up to
+// kDeepBedDepth (21.15), so this is its deepest.
+inline constexpr double kYadeDeepDepth = 19.7, kYadeDeepCompactionDamping = 0.65;
+// YADE's compaction damping for a bed `depth` largest diameters deep: linear between the depths it was measured at
+// (kYadeShallowDepth, kDampingAnchorDepth, kYadeDeepDepth), the nearer end's value outside them (settle.json says so).
 double yade_compaction_damping(double depth_in_largest_diameters);
 // The compaction's step as a fraction of the Rayleigh / contact time: twice the settle's 0.2, the setting
 // measured to give the same structure for 0.65x the processor time (coupling/README.md, "The compaction's time

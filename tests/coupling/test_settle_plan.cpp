@@ -208,7 +208,7 @@ TEST(SettlePlan, CompactionDampingIsTheMeasuredValueAndSaysWhereItWasMeasured) {
 
 // YADE's value was measured at two depths, 0.4 at 14.1 largest diameters and 0.6 at 9.4: linear between, the
 // nearer value outside, and the record says when the bed lies outside them.
-TEST(SettlePlan, YadeCompactionDampingFollowsTheBedsDepthBetweenTheTwoMeasured) {
+TEST(SettlePlan, YadeCompactionDampingFollowsTheBedsDepthBetweenTheThreeMeasured) {
   Scene y = bed(3);
   y.relax.engine = "yade";
   auto damping = [&](double depth) { return *settle_choices(y, 0.63, {}, depth).settings.compaction_damping; };
@@ -217,12 +217,24 @@ TEST(SettlePlan, YadeCompactionDampingFollowsTheBedsDepthBetweenTheTwoMeasured) 
   EXPECT_DOUBLE_EQ(damping(9.4), 0.6);
   EXPECT_NEAR(damping(0.5 * (9.4 + 14.1)), 0.5, 1e-12);  // half way: half way
   EXPECT_NEAR(damping(9.7), 0.6 - 0.2 * 0.3 / 4.7, 1e-12);
-  EXPECT_DOUBLE_EQ(damping(42.3), 0.4);
+  EXPECT_DOUBLE_EQ(damping(19.7), 0.65);
+  EXPECT_NEAR(damping(16.9), 0.525, 1e-12);  // half way between 14.1 (0.4) and 19.7 (0.65)
+  EXPECT_DOUBLE_EQ(damping(42.3), 0.65);
   EXPECT_DOUBLE_EQ(damping(5.0), 0.6);
   EXPECT_NE(from(9.7).find("YADE"), std::string::npos) << from(9.7);
   EXPECT_EQ(from(9.7).find("not measured"), std::string::npos) << from(9.7);
+  EXPECT_EQ(from(19.0).find("not measured"), std::string::npos) << from(19.0);
   EXPECT_NE(from(5.0).find("not measured there"), std::string::npos) << from(5.0);
+  EXPECT_NE(from(20.0).find("not measured there"), std::string::npos) << from(20.0);
   EXPECT_NE(from(42.3).find("not measured there"), std::string::npos) << from(42.3);
+  // A 2D bed keeps bed3d's value at any depth: the rule was measured in 3D.
+  Scene y2 = bed(2);
+  y2.relax.engine = "yade";
+  for (const double depth : {9.4, 19.6}) {
+    const SettleChoices c2 = settle_choices(y2, 0.83, {}, depth);
+    EXPECT_DOUBLE_EQ(*c2.settings.compaction_damping, 0.4) << depth;
+    EXPECT_NE(c2.record["compaction_damping"]["from"].get<std::string>().find("2D"), std::string::npos);
+  }
 }
 
 // A bed deeper than 1.5x the depth settle was measured at gets a warning naming its depth, in settle.json too;
@@ -260,7 +272,7 @@ TEST(SettlePlan, ChoicesRecordTheTargetAndWhereEachValueCameFrom) {
   EXPECT_EQ(c.record["target_phi"]["from"]["source"], "calibration pour");
   s.relax.engine = "yade";
   // YADE compacts at its own damping, measured against YADE's pours of bed3d (docs/guide/settle.md), not LIGGGHTS'
-  EXPECT_EQ(settle_choices(s, 0.63, {}, 15.0).settings.compaction_damping, 0.4);
+  EXPECT_EQ(settle_choices(s, 0.63, {}, 14.1).settings.compaction_damping, 0.4);
   EXPECT_EQ(settle_choices(s, 0.63, {}, 15.0).settings.damping, 0.5) << "YADE's settle keeps the damping it was measured at";
 }
 
