@@ -131,6 +131,28 @@ bool Walker::roll_off_top(const Vec3& x, Vec3& d, std::uint64_t salt) const {
 //   on a grain, R = r + r_j; 1 / r about an edge or a vertex; 0 over a face; the exact second derivative is
 //   h^2 / R at most there), and the sum of the two's over sin(theta) on two, theta the angle between their
 //   normals (0 for two faces: a straight groove); taken twice over for the parameter's uneven speed.
+// A bound on the curvature of the path between x and xb, along which the centre travels at most `travel` (the
+// sag bound above). A contact's normal curvature: a grain's 1 / R; a triangle's 0 where the grain lies over its
+// face at both ends (the slab between is convex), 1 / r about an edge or a vertex. On two contacts, their sum
+// over the sine of the normals' angle, which turns by at most travel / r for each.
+double Walker::path_curvature(const Vec3& x, const Vec3& xb, double travel) const {
+  Vec3 nx[2], nb[2];
+  double kappa = 0.0;
+  for (std::size_t i = 0; i < active.size(); ++i) {
+    const Partner& a = active[i];
+    nx[i] = normal(a, x), nb[i] = normal(a, xb);
+    if (a.tri < 0) kappa += 1.0 / a.R;
+    else {
+      const Vec3& n = e.mesh.normal(a.tri);
+      const bool face = std::abs(nx[i].dot(n)) >= 1.0 - 1e-12 && std::abs(nb[i].dot(n)) >= 1.0 - 1e-12;
+      kappa += face ? 0.0 : 1.0 / r;
+    }
+  }
+  if (active.size() < 2 || kappa == 0.0) return kappa;
+  const double sin_low = std::min(nx[0].cross(nx[1]).norm(), nb[0].cross(nb[1]).norm()) - 2.0 * travel / r;
+  return sin_low > 0.0 ? kappa / sin_low : std::numeric_limits<double>::infinity();
+}
+
 double Walker::step_graze(const Vec3& x, const Vec3& xb, double h, const Vec3& d, double sb) const {
   constexpr double kPathSpeed = 1.1;
   auto gap_of = [&](const Partner& q, const Vec3& p) {
@@ -141,25 +163,13 @@ double Walker::step_graze(const Vec3& x, const Vec3& xb, double h, const Vec3& d
     return project(p) ? p : Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   };
   auto spread = [&](double, double ds) { return kPathSpeed * h * std::abs(ds); };
-  // A contact's normal curvature: a grain's 1 / R; a triangle's 0 where the grain lies over its face at both
-  // ends (the slab between is convex), 1 / r about an edge or a vertex.
-  auto bend = [&](const Partner& a) {
-    if (a.tri < 0) return 1.0 / a.R;
-    const Vec3& n = e.mesh.normal(a.tri);
-    const bool face = std::abs(normal(a, x).dot(n)) >= 1.0 - 1e-12 && std::abs(normal(a, xb).dot(n)) >= 1.0 - 1e-12;
-    return face ? 0.0 : 1.0 / r;
+  // The bound on the gap's second derivative, taken when a partner first needs it (most steps clear every
+  // partner by the travel bound).
+  double M = -1.0;
+  auto sag = [&](double lo, double hi) {
+    if (M < 0.0) M = h * h * (kPathSpeed * kPathSpeed / (0.9 * r) + 2.0 * path_curvature(x, xb, kPathSpeed * h * sb));
+    return M * (hi - lo) * (hi - lo) / 8.0;
   };
-  double kappa = bend(active[0]);
-  if (active.size() == 2) {
-    // The normals turn by at most the travel over r along the step.
-    const double sin_low = std::min(normal(active[0], x).cross(normal(active[1], x)).norm(),
-                                    normal(active[0], xb).cross(normal(active[1], xb)).norm()) -
-                           2.0 * kPathSpeed * h * sb / r;
-    kappa += bend(active[1]);
-    if (kappa > 0.0) kappa = sin_low > 0.0 ? kappa / sin_low : std::numeric_limits<double>::infinity();
-  }
-  const double M = h * h * (kPathSpeed * kPathSpeed / (0.9 * r) + 2.0 * kappa);
-  auto sag = [&](double lo, double hi) { return M * (hi - lo) * (hi - lo) / 8.0; };
   return first_graze_of(0.0, sb, x, xb, near, gap_of, 1e-9 * r, 1e-9 * r, at, spread, sag);
 }
 

@@ -162,6 +162,7 @@ struct Walker {
   int slide_exact(Vec3& x, const Vec3& d);
   bool face_contact(int t, const Vec3& x, Vec3& n, double& margin, double tol) const;
   bool roll_off_top(const Vec3& x, Vec3& d, std::uint64_t salt) const;
+  double path_curvature(const Vec3& x, const Vec3& xb, double travel) const;
   double step_graze(const Vec3& x, const Vec3& xb, double h, const Vec3& d, double sb) const;
   Vec3 place(Vec3 x);
 };

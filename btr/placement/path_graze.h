@@ -96,10 +96,15 @@ double first_graze_of(double a, double b, const Vec3& Pa, const Vec3& Pb, const 
     const double glo = gap(o, Plo), ghi = gap(o, Phi);
     return glo >= Dlo - depth || ghi >= Dhi - depth || std::min(glo, ghi) >= S - depth;
   };
-  const double Da = spread(a, b - a), Db = spread(b, a - b), S = sag(a, b);
+  const double Da = spread(a, b - a), Db = spread(b, a - b);
+  double S = std::nan("");  // sag(a, b), taken only for a partner the travel bound leaves open
   std::vector<const Item*> open;
-  for (const Item& o : partners)
-    if (gap(o, Pa) >= touching && gap(o, Pb) >= touching && !clear(o, Pa, Pb, Da, Db, S)) open.push_back(&o);
+  for (const Item& o : partners) {
+    const double ga = gap(o, Pa), gb = gap(o, Pb);
+    if (ga < touching || gb < touching || ga >= Da - depth || gb >= Db - depth) continue;
+    if (std::isnan(S)) S = sag(a, b);
+    if (std::min(ga, gb) < S - depth) open.push_back(&o);
+  }
   if (open.empty()) return std::nan("");
   auto inside = [&](const Item& o, const Vec3& P) { return gap(o, P) < -depth; };
   return detail::graze_in(a, b, Pa, Pb, open, clear, inside, at, spread, sag);
