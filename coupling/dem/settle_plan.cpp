@@ -165,7 +165,8 @@ std::string settle_depth_warning(double depth, int slabs, bool yade) {
   if (slabs > 1)
     return deep + "compacted in " + std::to_string(slabs) + " slabs from the floor up, as a pour builds it; "
            "measured on one such bed only (39 largest diameters, docs/settle/deep" +
-           (yade ? ", in LIGGGHTS; YADE's slabs were not measured against pours" : "") +
+           (yade ? ", in LIGGGHTS; in YADE one bed of 26.9 in 2 slabs, each slab's compaction damping from its own "
+                   "depth, against two pours: packing fraction within them, coordination 0.04 under them on average" : "") +
            "): coordination and density against height within its pours' scatter, packing fraction +0.002 over them "
            "(the target 0.0015 under them, the settle 0.003 over its target); `btr pour` gives the reference";
   return deep + "deeper beds overshoot the target (bed3d at 42.3: phi +0.006 and Z "
@@ -215,9 +216,14 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
       coarser_step_3d(c.scene, kSettleTimestepFraction3d,
                       "btr settle: the settled beds' packing fraction and coordination are those at 0.2 (to 1e-4 and "
                       "0.02, 8 beds in LIGGGHTS, 1 in YADE) for 0.66-0.94x the relaxation's time (docs/guide/settle.md)");
-  // YADE's depth rule was measured on 3D beds; a 2D bed keeps bed3d's value (below).
+  // YADE's depth rule was measured on 3D beds; a 2D bed keeps bed3d's value (below). A bed compacted in slabs takes
+  // the value of one slab's depth: each slab compacts under its own weight on a settled bed, as a bed that deep
+  // does (measured at 26.9 largest diameters in 2 slabs: docs/guide/settle.md, "YADE's slabs against YADE's pours").
   const bool yade_3d = yade && scene.dimension == 3;
-  const double compaction_damping = !yade ? kCompactionDamping : yade_3d ? yade_compaction_damping(depth) : kYadeCompactionDamping;
+  const int slabs = settle_compaction_slabs(depth);
+  const double compacted_depth = depth / slabs;
+  const double compaction_damping =
+      !yade ? kCompactionDamping : yade_3d ? yade_compaction_damping(compacted_depth) : kYadeCompactionDamping;
   c.settings.compaction_damping = compaction_damping;
   const std::string depth_text = g6(depth) + " largest diameters";
   std::string damping_from;
@@ -227,11 +233,14 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
                    "is not used in 2D, where 0.4 landed the held-out 2D bed's coordination at 19.6 and 0.5 did not "
                    "(docs/guide/settle.md; this bed: " + depth_text + ", not measured in 2D otherwise)";
   } else if (yade) {
-    const bool between = depth >= kYadeShallowDepth && depth <= kYadeDeepDepth;
+    const bool between = compacted_depth >= kYadeShallowDepth && compacted_depth <= kYadeDeepDepth;
     damping_from = "btr settle's YADE compaction damping, measured against YADE's own pours of bed3d's grains at " +
                    g6(kYadeShallowDepth) + " largest diameters deep (" + g6(kYadeShallowCompactionDamping) + "), " +
                    g6(kDampingAnchorDepth) + " (" + g6(kYadeCompactionDamping) + ") and " + g6(kYadeDeepDepth) + " (" +
                    g6(kYadeDeepCompactionDamping) + "), linear between (this bed: " + depth_text +
+                   (slabs > 1 ? ", compacted in " + std::to_string(slabs) + " slabs of " + g6(compacted_depth) +
+                                    ", whose depth sets it"
+                              : "") +
                    (between ? ")" : ", outside them: the nearer end's value, not measured there)");
   } else {
     const bool measured_depth = depth >= 0.75 * kDampingAnchorDepth && depth <= kDeepBedDepth;
@@ -259,7 +268,7 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
                              "average (coupling/README.md)")}}},
       {"stop_rule", stop_rule_record(scene, c.stop_rule)},
   };
-  c.settings.compaction_slabs = settle_compaction_slabs(depth);
+  c.settings.compaction_slabs = slabs;
   if (c.settings.compaction_slabs > 1)
     c.record["compaction_slabs"] = {
         {"value", c.settings.compaction_slabs},

@@ -162,7 +162,13 @@ TEST(CompactionSlabs, SettleCompactsBedsDeeperThanItsMeasuredDepthInSlabs) {
   EXPECT_EQ(yade.settings.compaction_slabs, 4) << "the same rule in YADE";
   const std::string yade_warning = yade.record["compaction_damping"]["warning"];
   EXPECT_NE(yade_warning.find("4 slabs"), std::string::npos) << yade_warning;
-  EXPECT_NE(yade_warning.find("YADE's slabs were not measured"), std::string::npos) << yade_warning;
+  EXPECT_NE(yade_warning.find("in YADE one bed of 26.9 in 2 slabs"), std::string::npos) << yade_warning;
+  // YADE's compaction damping from one slab's depth, by hand: 50 / 4 = 12.5 largest diameters, between 9.4 (0.6)
+  // and 14.1 (0.4): 0.6 - 0.2 (12.5 - 9.4) / 4.7; 26.9 in 2 slabs of 13.45: 0.6 - 0.2 (13.45 - 9.4) / 4.7.
+  EXPECT_NEAR(yade.settings.compaction_damping.value(), 0.6 - 0.2 * 3.1 / 4.7, 1e-12);
+  EXPECT_NEAR(btr::settle_choices(s, 0.63, {}, 26.9, {}).settings.compaction_damping.value(), 0.6 - 0.2 * 4.05 / 4.7, 1e-12);
+  EXPECT_NEAR(btr::settle_choices(s, 0.63, {}, 19.7, {}).settings.compaction_damping.value(), 0.65, 1e-12)
+      << "one slab up to 21.15: the bed's own depth";
   EXPECT_EQ(btr::settle_choices(s, 0.63, {}, 14.1, {}).settings.compaction_slabs, 1);
 }
 

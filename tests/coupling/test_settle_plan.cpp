@@ -206,8 +206,9 @@ TEST(SettlePlan, CompactionDampingIsTheMeasuredValueAndSaysWhereItWasMeasured) {
   EXPECT_NE(near.find("this bed: 15 largest diameters"), std::string::npos) << near;
 }
 
-// YADE's value was measured at two depths, 0.4 at 14.1 largest diameters and 0.6 at 9.4: linear between, the
-// nearer value outside, and the record says when the bed lies outside them.
+// YADE's value was measured at three depths, 0.6 at 9.4 largest diameters, 0.4 at 14.1 and 0.65 at 19.7: linear
+// between, the nearer value outside, and the record says when the bed lies outside them; a bed compacted in slabs
+// takes the value of one slab's depth.
 TEST(SettlePlan, YadeCompactionDampingFollowsTheBedsDepthBetweenTheThreeMeasured) {
   Scene y = bed(3);
   y.relax.engine = "yade";
@@ -219,14 +220,17 @@ TEST(SettlePlan, YadeCompactionDampingFollowsTheBedsDepthBetweenTheThreeMeasured
   EXPECT_NEAR(damping(9.7), 0.6 - 0.2 * 0.3 / 4.7, 1e-12);
   EXPECT_DOUBLE_EQ(damping(19.7), 0.65);
   EXPECT_NEAR(damping(16.9), 0.525, 1e-12);  // half way between 14.1 (0.4) and 19.7 (0.65)
-  EXPECT_DOUBLE_EQ(damping(42.3), 0.65);
+  EXPECT_DOUBLE_EQ(damping(21.0), 0.65);  // one slab up to 21.15: the nearer end's value
+  EXPECT_NEAR(damping(42.3), 0.4, 1e-12);  // 3 slabs of 14.1 each: the value at 14.1
   EXPECT_DOUBLE_EQ(damping(5.0), 0.6);
   EXPECT_NE(from(9.7).find("YADE"), std::string::npos) << from(9.7);
   EXPECT_EQ(from(9.7).find("not measured"), std::string::npos) << from(9.7);
   EXPECT_EQ(from(19.0).find("not measured"), std::string::npos) << from(19.0);
   EXPECT_NE(from(5.0).find("not measured there"), std::string::npos) << from(5.0);
   EXPECT_NE(from(20.0).find("not measured there"), std::string::npos) << from(20.0);
-  EXPECT_NE(from(42.3).find("not measured there"), std::string::npos) << from(42.3);
+  EXPECT_NE(from(21.0).find("not measured there"), std::string::npos) << from(21.0);
+  EXPECT_NE(from(42.3).find("3 slabs of 14.1"), std::string::npos) << from(42.3);
+  EXPECT_EQ(from(42.3).find("not measured"), std::string::npos) << from(42.3);
   // A 2D bed keeps bed3d's value at any depth: the rule was measured in 3D.
   Scene y2 = bed(2);
   y2.relax.engine = "yade";
