@@ -28,6 +28,12 @@ nlohmann::json stop_rule_record(const Scene& scene, const std::string& rule) {
                        g6(scene.relax.stop_unbalanced_force) + ")"}};
 }
 
+// settle.json's record of the scene's own step, `why` appended to where it came from.
+nlohmann::json scenes_step(const Scene& scene, const std::string& why = "") {
+  return {{"value", scene.relax.timestep ? nlohmann::json(nullptr) : nlohmann::json(scene.relax.timestep_fraction)},
+          {"from", (scene.relax.timestep ? "the scene's relax.timestep" : "the scene's relax.timestep_fraction") + why}};
+}
+
 // A 3D step fraction settle measured to leave the structure as it was: `scene` takes it unless its own step is
 // coarser or explicit (2D keeps the scene's: not measured there). Returns settle.json's record of the fraction used.
 nlohmann::json coarser_step_3d(Scene& scene, double fraction, const std::string& why) {
@@ -35,8 +41,7 @@ nlohmann::json coarser_step_3d(Scene& scene, double fraction, const std::string&
     scene.relax.timestep_fraction = fraction;
     return {{"value", fraction}, {"from", why}};
   }
-  return {{"value", scene.relax.timestep ? nlohmann::json(nullptr) : nlohmann::json(scene.relax.timestep_fraction)},
-          {"from", scene.relax.timestep ? "the scene's relax.timestep" : "the scene's relax.timestep_fraction"}};
+  return scenes_step(scene);
 }
 
 }  // namespace
@@ -163,12 +168,15 @@ std::string settle_depth_warning(double depth, int slabs, bool yade) {
   const std::string deep = "this bed is " + g6(depth) + " largest diameters deep, beyond the " + g6(kDeepBedDepth) +
                            " settle was validated to (9.3-14.1): ";
   if (slabs > 1)
-    return deep + "compacted in " + std::to_string(slabs) + " slabs from the floor up, as a pour builds it; "
-           "measured on one such bed only (39 largest diameters, docs/settle/deep" +
-           (yade ? ", in LIGGGHTS; in YADE one bed of 26.9 in 2 slabs, each slab's compaction damping from its own "
-                   "depth, against two pours: packing fraction within them, coordination 0.04 under them on average" : "") +
-           "): coordination and density against height within its pours' scatter, packing fraction +0.002 over them "
-           "(the target 0.0015 under them, the settle 0.003 over its target); `btr pour` gives the reference";
+    return deep + "compacted in " + std::to_string(slabs) + " slabs from the floor up, as a pour builds it; " +
+           (yade ? "measured in YADE on two such beds of 2 slabs (26.9 largest diameters of bed3d's grains, and 23 of "
+                   "held-out grains, docs/guide/settle.md), each slab's compaction damping from its own depth: on the "
+                   "mean of three settles packing fraction within 0.002 of the pours and coordination within 0.05, "
+                   "each settle off by its calibration's draw"
+                 : "measured on one such bed in LIGGGHTS (39 largest diameters, docs/settle/deep): coordination and "
+                   "density against height within its pours' scatter, packing fraction +0.002 over them (the target "
+                   "0.0015 under them, the settle 0.003 over its target)") +
+           "; `btr pour` gives the reference";
   return deep + "deeper beds overshoot the target (bed3d at 42.3: phi +0.006 and Z "
          "+0.15 over its pours; at 141: +0.014, still moving 0.3 s after the switch), since the upper bed keeps "
          "collapsing after the compaction stops; `btr pour` gives the reference (docs/settle/README.md, \"Deep beds\")";
@@ -212,16 +220,21 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
   c.settings.target_margin = margin.value;
   c.settings.compaction_timestep_fraction = kSettleCompactionTimestepFraction;
   c.scene = scene;
-  const nlohmann::json step_record =
-      coarser_step_3d(c.scene, kSettleTimestepFraction3d,
-                      "btr settle: the settled beds' packing fraction and coordination are those at 0.2 (to 1e-4 and "
-                      "0.02, 8 beds in LIGGGHTS, 1 in YADE) for 0.66-0.94x the relaxation's time (docs/guide/settle.md)");
   // YADE's depth rule was measured on 3D beds; a 2D bed keeps bed3d's value (below). A bed compacted in slabs takes
   // the value of one slab's depth: each slab compacts under its own weight on a settled bed, as a bed that deep
   // does (measured at 26.9 largest diameters in 2 slabs: docs/guide/settle.md, "YADE's slabs against YADE's pours").
   const bool yade_3d = yade && scene.dimension == 3;
   const int slabs = settle_compaction_slabs(depth);
   const double compacted_depth = depth / slabs;
+  const nlohmann::json step_record =
+      slabs > 1
+          ? scenes_step(scene, ": a bed compacted in slabs keeps it after the compaction, since at 0.4 a held-out bed "
+                               "23 largest diameters deep (restitution 0.3) still moved at the max time in both "
+                               "engines, and at 0.2 came to rest 0.02-0.03 s after the compaction (docs/guide/settle.md)")
+          : coarser_step_3d(c.scene, kSettleTimestepFraction3d,
+                            "btr settle: the settled beds' packing fraction and coordination are those at 0.2 (to "
+                            "1e-4 and 0.02, 8 beds in LIGGGHTS and 1 in YADE, up to 14 largest diameters deep) for "
+                            "0.66-0.94x the relaxation's time (docs/guide/settle.md)");
   const double compaction_damping =
       !yade ? kCompactionDamping : yade_3d ? yade_compaction_damping(compacted_depth) : kYadeCompactionDamping;
   c.settings.compaction_damping = compaction_damping;

@@ -134,6 +134,9 @@ inline constexpr double kSettleCompactionTimestepFraction = 0.4;
 // explicit; 2D and heaps keep the scene's). Against 0.2 on docs/settle's beds (3000 grains; friction 0.1-0.5,
 // rolling friction, size ratio 1-4, a cylinder), bed3d and a YADE bed (docs/guide/settle.md, "The settle's time
 // step"): the same bulk packing fraction to 1e-4 and coordination to 0.02, for 0.66-0.94x the relaxation's time.
+// Those beds were 9-14 largest diameters deep; a bed compacted in slabs (deeper than kDeepBedDepth) keeps the
+// scene's step: a held-out bed 23 deep (restitution 0.3) kept moving to the max time at 0.4 in LIGGGHTS and in
+// YADE, and came to rest at 0.2 in both (docs/guide/settle.md, "A held-out deep bed").
 inline constexpr double kSettleTimestepFraction3d = 0.4;
 // The quasi-static settle's local damping after a bed's compaction. LIGGGHTS: 0.7, measured on bed3d at 10 000
 // grains (BTR seeds 1-3, compaction damping 0.065 and 0.075): the same packing fraction to 1e-4, Z 0.009-0.039

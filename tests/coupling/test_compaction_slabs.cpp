@@ -162,7 +162,8 @@ TEST(CompactionSlabs, SettleCompactsBedsDeeperThanItsMeasuredDepthInSlabs) {
   EXPECT_EQ(yade.settings.compaction_slabs, 4) << "the same rule in YADE";
   const std::string yade_warning = yade.record["compaction_damping"]["warning"];
   EXPECT_NE(yade_warning.find("4 slabs"), std::string::npos) << yade_warning;
-  EXPECT_NE(yade_warning.find("in YADE one bed of 26.9 in 2 slabs"), std::string::npos) << yade_warning;
+  EXPECT_NE(yade_warning.find("measured in YADE on two such beds"), std::string::npos) << yade_warning;
+  EXPECT_EQ(yade_warning.find("LIGGGHTS"), std::string::npos) << "YADE's warning names YADE's measurements only";
   // YADE's compaction damping from one slab's depth, by hand: 50 / 4 = 12.5 largest diameters, between 9.4 (0.6)
   // and 14.1 (0.4): 0.6 - 0.2 (12.5 - 9.4) / 4.7; 26.9 in 2 slabs of 13.45: 0.6 - 0.2 (13.45 - 9.4) / 4.7.
   EXPECT_NEAR(yade.settings.compaction_damping.value(), 0.6 - 0.2 * 3.1 / 4.7, 1e-12);
@@ -216,7 +217,6 @@ TEST(CompactionSlabs, YadeCompactsTheBedSlabBySlab) {
   s.compaction_damping = btr::kYadeCompactionDamping;
   s.compaction_timestep_fraction = btr::kSettleCompactionTimestepFraction;
   s.damping = 0.5;
-  b.scene.relax.timestep_fraction = btr::kSettleTimestepFraction3d;
   b.scene.relax.stop_rule = "unbalanced-force";
   const std::string dir = btr_test::fresh_dir("slabs_yade_run");
   const btr::RelaxResult r = btr::relax(b.packing, b.scene, "yade", s, dir);

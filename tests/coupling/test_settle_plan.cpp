@@ -257,7 +257,7 @@ TEST(SettlePlan, DeepBedsAreServedWithAWarningNamingTheirDepth) {
   y.relax.engine = "yade";
   EXPECT_EQ(settle_choices(y, 0.63, {}, 42.3).record["compaction_damping"]["warning"],
             settle_depth_warning(42.3, settle_compaction_slabs(42.3), true))
-      << "YADE too, its slabs not measured";
+      << "YADE too, with what was measured in YADE";
 }
 
 TEST(SettlePlan, ChoicesRecordTheTargetAndWhereEachValueCameFrom) {
@@ -280,7 +280,7 @@ TEST(SettlePlan, ChoicesRecordTheTargetAndWhereEachValueCameFrom) {
   EXPECT_EQ(settle_choices(s, 0.63, {}, 15.0).settings.damping, 0.5) << "YADE's settle keeps the damping it was measured at";
 }
 
-TEST(SettlePlan, Bed3dSettlesAtTheCompactionsStepUnlessTheSceneAsksForMore) {
+TEST(SettlePlan, Bed3dSettlesAtTheCompactionsStepUnlessTheSceneAsksForMoreOrIsCompactedInSlabs) {
   Scene s = bed(3);
   ASSERT_LT(s.relax.timestep_fraction, kSettleTimestepFraction3d);
   SettleChoices c = settle_choices(s, 0.63, {}, 15.0);
@@ -289,6 +289,20 @@ TEST(SettlePlan, Bed3dSettlesAtTheCompactionsStepUnlessTheSceneAsksForMore) {
   EXPECT_EQ(c.scene.relax.timestep_fraction, *c.settings.compaction_timestep_fraction);  // one step for the run
   EXPECT_EQ(c.scene.grains.count, s.grains.count);  // the rest of the scene as it was
   EXPECT_EQ(c.scene.relax.stop_unbalanced_force, s.relax.stop_unbalanced_force);
+  // A bed deeper than one compaction serves (kDeepBedDepth: compacted in slabs) settles at the scene's step, in
+  // either engine; its compaction keeps the coarser one.
+  for (const char* engine : {"liggghts", "yade"}) {
+    s.relax.engine = engine;
+    const SettleChoices deep = settle_choices(s, 0.63, {}, kDeepBedDepth + 1.0);
+    ASSERT_GT(deep.settings.compaction_slabs, 1) << engine;
+    EXPECT_EQ(deep.scene.relax.timestep_fraction, s.relax.timestep_fraction) << engine;
+    EXPECT_EQ(deep.record["timestep_fraction"]["value"].get<double>(), s.relax.timestep_fraction) << engine;
+    EXPECT_NE(deep.record["timestep_fraction"]["from"].get<std::string>().find("slabs"), std::string::npos);
+    EXPECT_EQ(*deep.settings.compaction_timestep_fraction, kSettleCompactionTimestepFraction) << engine;
+    EXPECT_EQ(settle_choices(s, 0.63, {}, kDeepBedDepth).scene.relax.timestep_fraction, kSettleTimestepFraction3d)
+        << engine << ": one compaction up to kDeepBedDepth";
+  }
+  s.relax.engine = "liggghts";
   s.relax.timestep_fraction = 0.5;  // a coarser step of the scene's own is kept
   EXPECT_EQ(settle_choices(s, 0.63, {}, 15.0).scene.relax.timestep_fraction, 0.5);
   s.relax.timestep_fraction = 0.1;

@@ -88,3 +88,22 @@ def test_run_failure_carries_its_kind(library):
     assert library.RunFailure("boom").kind == "engine_error"
     e = library.RunFailure("blow-up: ...", "blow_up")
     assert e.kind == "blow_up" and str(e) == "blow-up: ..."
+
+
+@pytest.mark.parametrize("periodic", [True, False])
+def test_a_periodic_cells_collider_searches_every_pair_at_every_run(library, periodic):
+    """YADE's incremental periodic sort let two grains whose boxes straddled the cell's boundary pass into each
+    other (a pour, coupling/README.md "Open floors"): in a periodic cell every collider run finds every pair
+    whose boxes overlap; a walled container keeps YADE's incremental search."""
+    library.MODEL, library.COMPACTION, library.DAMPING, library.GRAVITY = "hertz", None, 0.0, 9.81
+    library.VERLET_DIST = 1e-4
+    library._pairs[:] = [(0, 0, 0.5, 0.5)]
+    library._cell = None
+    library.O.reset()
+    if periodic:
+        library.periodic_cell(0.01, 0.01, 0.1)
+    library.build_engines()
+    collider = library._collider
+    assert collider.sortThenCollide is periodic
+    assert collider.allowBiggerThanPeriod is periodic
+    assert collider.sortAxis == (2 if periodic else 0)
