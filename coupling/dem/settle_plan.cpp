@@ -9,6 +9,7 @@
 #include "coupling/dem/preload.h"
 #include "coupling/dem/relax_plan.h"
 #include "coupling/dem/relax_target.h"
+#include "coupling/dem/timestep.h"
 
 namespace btr {
 namespace {
@@ -218,7 +219,6 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
   c.settings.target_phi = target_phi;
   c.settings.damping = yade ? kSettleDamping : kLiggghtsSettleDamping;
   c.settings.target_margin = margin.value;
-  c.settings.compaction_timestep_fraction = kSettleCompactionTimestepFraction;
   c.scene = scene;
   // YADE's depth rule was measured on 3D beds; a 2D bed keeps bed3d's value (below). A bed compacted in slabs takes
   // the value of one slab's depth: each slab compacts under its own weight on a settled bed, as a bed that deep
@@ -226,11 +226,19 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
   const bool yade_3d = yade && scene.dimension == 3;
   const int slabs = settle_compaction_slabs(depth);
   const double compacted_depth = depth / slabs;
+  const bool coarse_compaction = !yade && scene.dimension == 3 && slabs == 1;
+  const double compaction_step = coarse_compaction ? kLiggghtsCompactionTimestepFraction3d : kSettleCompactionTimestepFraction;
+  c.settings.compaction_timestep_fraction = compaction_step;
+  const double restitution = lowest_restitution(scene);
   const nlohmann::json step_record =
       slabs > 1
           ? scenes_step(scene, ": a bed compacted in slabs keeps it after the compaction, since at 0.4 a held-out bed "
                                "23 largest diameters deep (restitution 0.3) still moved at the max time in both "
                                "engines, and at 0.2 came to rest 0.02-0.03 s after the compaction (docs/guide/settle.md)")
+      : restitution < kCoarseSettleMinRestitution
+          ? scenes_step(scene, ": restitution " + g6(restitution) + " (below " + g6(kCoarseSettleMinRestitution) +
+                                   ") keeps it after the compaction, since at 0.4 beds of restitution 0.1 did not "
+                                   "come to rest or crashed LIGGGHTS, and at 0.2 came to rest (docs/guide/settle.md)")
           : coarser_step_3d(c.scene, kSettleTimestepFraction3d,
                             "btr settle: the settled beds' packing fraction and coordination are those at 0.2 (to "
                             "1e-4 and 0.02, 8 beds in LIGGGHTS and 1 in YADE, up to 14 largest diameters deep) for "
@@ -266,8 +274,12 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
       {"compaction_damping",
        {{"value", compaction_damping}, {"bed_depth_largest_diameters", depth}, {"from", damping_from}}},
       {"compaction_timestep_fraction",
-       {{"value", kSettleCompactionTimestepFraction},
-        {"from", "btr settle: twice the scene's usual 0.2, measured on bed3d to give the same structure"}}},
+       {{"value", compaction_step},
+        {"from", coarse_compaction
+                     ? "btr settle: LIGGGHTS' one compaction of a 3D bed, three times the scene's usual 0.2, measured on "
+                       "bed3d and docs/settle's periodic beds to give the same structure as 0.4 (docs/guide/settle.md)"
+                     : "btr settle: twice the scene's usual 0.2, measured on bed3d to give the same structure (0.6, "
+                       "taken for LIGGGHTS' one compaction of a 3D bed, was not measured in YADE, in 2D or in slabs)"}}},
       {"timestep_fraction", step_record},
       {"target_margin", margin.record},
       {"friction_scales", {{"value", scene.relax.friction_scales}, {"from", "the scene's relax.friction_scales"}}},

@@ -130,7 +130,15 @@ double yade_compaction_damping(double depth_in_largest_diameters);
 // measured to give the same structure for 0.65x the processor time (coupling/README.md, "The compaction's time
 // step").
 inline constexpr double kSettleCompactionTimestepFraction = 0.4;
-// The quasi-static settle after the compaction, 3D beds: the same fraction (the scene's own when coarser or
+// LIGGGHTS compacts a 3D bed in one go at 0.6: bed3d's BTR seeds 1-3 relaxed to its pours' 0.6254 at compaction
+// damping 0.085 gave Z 5.512 / 5.498 / 5.478 (mean 5.496) against 5.538 / 5.486 / 5.474 (5.499) at 0.4, the pours'
+// 5.498 +- 0.020, and the same packing fraction to 0.0003; on docs/settle's six periodic rows (three settle seeds
+// each) every row's mean Z within 1 of its floors of where it was and the packing fractions within 0.0006, for 0.8x
+// the relaxation's processor time (docs/guide/settle.md, "The compaction's step at 0.6"). The frictionless
+// compaction's only limit is the normal contact's stability, which the rule's damping factor already carries (the
+// glass bed's margin is 8x the rule's 0.2). YADE, 2D beds and beds compacted in slabs keep 0.4: not measured there.
+inline constexpr double kLiggghtsCompactionTimestepFraction3d = 0.6;
+// The quasi-static settle after the compaction, 3D beds: 0.4 (the scene's own when coarser or
 // explicit; 2D and heaps keep the scene's). Against 0.2 on docs/settle's beds (3000 grains; friction 0.1-0.5,
 // rolling friction, size ratio 1-4, a cylinder), bed3d and a YADE bed (docs/guide/settle.md, "The settle's time
 // step"): the same bulk packing fraction to 1e-4 and coordination to 0.02, for 0.66-0.94x the relaxation's time.
@@ -138,6 +146,11 @@ inline constexpr double kSettleCompactionTimestepFraction = 0.4;
 // scene's step: a held-out bed 23 deep (restitution 0.3) kept moving to the max time at 0.4 in LIGGGHTS and in
 // YADE, and came to rest at 0.2 in both (docs/guide/settle.md, "A held-out deep bed").
 inline constexpr double kSettleTimestepFraction3d = 0.4;
+// ... for grains of restitution at least this: the beds above had 0.4-0.8. The matrix's bed_mu0.5 grains at
+// restitution 0.1 never came to rest at 0.4 (friction 0.5: unbalanced force 0.23 at the max time, 1 s) or crashed
+// LIGGGHTS (friction 1: "Lost atoms" 0.04 s after the compaction), and at 0.2 came to rest 0.03 s after it
+// (docs/guide/settle.md, "Low restitution"). Below it the settle keeps the scene's step.
+inline constexpr double kCoarseSettleMinRestitution = 0.4;
 // The quasi-static settle's local damping after a bed's compaction. LIGGGHTS: 0.7, measured on bed3d at 10 000
 // grains (BTR seeds 1-3, compaction damping 0.065 and 0.075): the same packing fraction to 1e-4, Z 0.009-0.039
 // lower (the pours' floor is 0.020), for 0.77x the relaxation's processor time; 0.8 is no faster (coupling/README.md,

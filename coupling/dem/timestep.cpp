@@ -27,14 +27,13 @@ std::map<int, RadiusRange> radius_ranges(const Grains& grains, const Scene& scen
   return ranges;
 }
 
-// The lowest restitution of any contact the scene can make (grain pairs take the mean, walls the grain's).
+}  // namespace
+
 double lowest_restitution(const Scene& scene) {
   double e = 1.0;
   for (const Component& c : scene.grains.components) e = std::min(e, c.material.restitution);
   return e;
 }
-
-}  // namespace
 
 double damping_ratio(double restitution) {
   if (restitution >= 1.0) return 0.0;

@@ -31,6 +31,8 @@ double hooke_characteristic_velocity(const Grains& grains);
 
 // Damping ratio of a contact of restitution e (0 for e = 1).
 double damping_ratio(double restitution);
+// The lowest restitution of any contact the scene can make (grain pairs take the mean, walls the grain's).
+double lowest_restitution(const Scene& scene);
 
 struct StableStep {
   double characteristic_time = 0.0;  // T_R or t_c [s]

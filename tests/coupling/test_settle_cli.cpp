@@ -351,7 +351,7 @@ TEST_F(SettleCli, AMaterialThatPoursLooserThanBtrIsReportedNotPassedOff) {
 }
 
 // 400 spheres of radius 0.45-0.5 mm rained into a periodic cell 6 mm square: a bed about 10 diameters deep.
-TEST_F(SettleCli, Bed3dSettlesAtTheCompactionsStepAndHandsTheUserTheScenesOwn) {
+TEST_F(SettleCli, Bed3dCompactsAndSettlesAtTheirOwnStepsAndHandsTheUserTheScenesOwn) {
   if (!btr_test::have_engine("liggghts")) {
     ADD_FAILURE() << "liggghts is not installed";
     return;
@@ -360,6 +360,7 @@ TEST_F(SettleCli, Bed3dSettlesAtTheCompactionsStepAndHandsTheUserTheScenesOwn) {
                                        "size = [0.006, 0.006]"),
                               "count = 300", "count = 400");
   body = replaced(body, "min = 0.4e-3, max = 0.5e-3", "min = 0.45e-3, max = 0.5e-3");
+  body = replaced(body, "restitution = 0.3", "restitution = 0.5");  // the coarse settle step's (kCoarseSettleMinRestitution)
   const std::string scene_path = scene_file("tiny_bed3d", body);
   const fs::path out = dir_ / "settle3d";
   // a shallow calibration cell (10 diameters wide, about 6 deep): enough for a window, and quick
@@ -367,12 +368,13 @@ TEST_F(SettleCli, Bed3dSettlesAtTheCompactionsStepAndHandsTheUserTheScenesOwn) {
   ASSERT_EQ(r.code, 0) << r.out << r.err;
   const nlohmann::json rec = nlohmann::json::parse(slurp(out / "settle.json"));
   EXPECT_EQ(rec["chosen"]["timestep_fraction"]["value"].get<double>(), kSettleTimestepFraction3d);
-  EXPECT_EQ(rec["chosen"]["compaction_timestep_fraction"]["value"].get<double>(), kSettleTimestepFraction3d);
+  EXPECT_EQ(rec["chosen"]["compaction_timestep_fraction"]["value"].get<double>(), kLiggghtsCompactionTimestepFraction3d);
 
-  // the relaxation ran at one step, the compaction's, through the settle after it
+  // the compaction ran at its fraction and the settle after it at the settle's, by the same rule
   const nlohmann::json relaxed = nlohmann::json::parse(slurp(out / "relax" / "relaxed.json"));
   const double step = relaxed["relax"]["timestep"].get<double>();
-  EXPECT_EQ(step, relaxed["target_phi"]["compaction_timestep"].get<double>());
+  EXPECT_NEAR(relaxed["target_phi"]["compaction_timestep"].get<double>() / step,
+              kLiggghtsCompactionTimestepFraction3d / kSettleTimestepFraction3d, 1e-12);
   // the user's own input keeps the scene's fraction, 0.2: half the step, by the same rule
   std::ifstream in(out / "dem_input" / "in.btr");
   std::string line;

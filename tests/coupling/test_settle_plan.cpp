@@ -264,7 +264,6 @@ TEST(SettlePlan, ChoicesRecordTheTargetAndWhereEachValueCameFrom) {
   Scene s = bed(3);
   const SettleChoices c = settle_choices(s, 0.63, {{"source", "calibration pour"}}, 15.0);
   EXPECT_EQ(c.settings.target_phi, 0.63);
-  EXPECT_EQ(c.settings.compaction_timestep_fraction, 0.4);
   EXPECT_EQ(c.settings.damping, 0.7);
   EXPECT_EQ(c.settings.target_margin, kCalibrationMargin);
   EXPECT_EQ(c.stop_rule, "unbalanced-force");
@@ -280,13 +279,48 @@ TEST(SettlePlan, ChoicesRecordTheTargetAndWhereEachValueCameFrom) {
   EXPECT_EQ(settle_choices(s, 0.63, {}, 15.0).settings.damping, 0.5) << "YADE's settle keeps the damping it was measured at";
 }
 
+TEST(SettlePlan, LiggghtsCompactsA3dBedInOneGoAtThreeTimesTheUsualStepAndEverythingElseAtTwice) {
+  Scene s = bed(3);
+  ASSERT_EQ(s.relax.engine, "liggghts");
+  SettleChoices c = settle_choices(s, 0.63, {}, 15.0);
+  EXPECT_EQ(*c.settings.compaction_timestep_fraction, 0.6);
+  EXPECT_EQ(c.record["compaction_timestep_fraction"]["value"].get<double>(), 0.6);
+  EXPECT_EQ(c.scene.relax.timestep_fraction, 0.4) << "the settle after it keeps 0.4";
+  // a bed compacted in slabs (kDeepBedDepth = 21.15 largest diameters), YADE and 2D beds keep 0.4: not measured there
+  EXPECT_EQ(*settle_choices(s, 0.63, {}, 30.0).settings.compaction_timestep_fraction, 0.4);
+  EXPECT_EQ(*settle_choices(s, 0.63, {}, 21.0).settings.compaction_timestep_fraction, 0.6);
+  const std::string slab_from = settle_choices(s, 0.63, {}, 30.0).record["compaction_timestep_fraction"]["from"];
+  EXPECT_NE(slab_from.find("not measured"), std::string::npos) << slab_from;
+  Scene y = s;
+  y.relax.engine = "yade";
+  EXPECT_EQ(*settle_choices(y, 0.63, {}, 15.0).settings.compaction_timestep_fraction, 0.4);
+  EXPECT_EQ(*settle_choices(bed(2), 0.85, {}, 15.0).settings.compaction_timestep_fraction, 0.4);
+}
+
+TEST(SettlePlan, LowRestitutionSettlesAtTheScenesStepAfterItsCompaction) {
+  Scene s = bed(3);
+  ASSERT_EQ(s.grains.components.front().material.restitution, 0.5);
+  ASSERT_EQ(settle_choices(s, 0.63, {}, 15.0).scene.relax.timestep_fraction, 0.4);
+  s.grains.components.front().material.restitution = 0.4;  // the lowest measured to come to rest at 0.4
+  EXPECT_EQ(settle_choices(s, 0.63, {}, 15.0).scene.relax.timestep_fraction, 0.4);
+  Component bouncy = s.grains.components.front();
+  bouncy.material.restitution = 0.9;
+  s.grains.components.front().material.restitution = 0.1;  // one species of low restitution is enough
+  s.grains.components.push_back(bouncy);
+  const SettleChoices c = settle_choices(s, 0.63, {}, 15.0);
+  EXPECT_EQ(c.scene.relax.timestep_fraction, s.relax.timestep_fraction);
+  EXPECT_EQ(c.scene.relax.timestep_fraction, 0.2);
+  const std::string from = c.record["timestep_fraction"]["from"];
+  EXPECT_NE(from.find("restitution 0.1 (below 0.4)"), std::string::npos) << from;
+  EXPECT_EQ(*c.settings.compaction_timestep_fraction, 0.6) << "the frictionless compaction keeps its own step";
+}
+
 TEST(SettlePlan, Bed3dSettlesAtTheCompactionsStepUnlessTheSceneAsksForMoreOrIsCompactedInSlabs) {
   Scene s = bed(3);
   ASSERT_LT(s.relax.timestep_fraction, kSettleTimestepFraction3d);
   SettleChoices c = settle_choices(s, 0.63, {}, 15.0);
   EXPECT_EQ(c.scene.relax.timestep_fraction, kSettleTimestepFraction3d);
   EXPECT_EQ(c.record["timestep_fraction"]["value"].get<double>(), kSettleTimestepFraction3d);
-  EXPECT_EQ(c.scene.relax.timestep_fraction, *c.settings.compaction_timestep_fraction);  // one step for the run
   EXPECT_EQ(c.scene.grains.count, s.grains.count);  // the rest of the scene as it was
   EXPECT_EQ(c.scene.relax.stop_unbalanced_force, s.relax.stop_unbalanced_force);
   // A bed deeper than one compaction serves (kDeepBedDepth: compacted in slabs) settles at the scene's step, in
