@@ -227,7 +227,8 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
   const int slabs = settle_compaction_slabs(depth);
   const double compacted_depth = depth / slabs;
   const bool coarse_compaction = !yade && scene.dimension == 3 && slabs == 1;
-  const double compaction_step = coarse_compaction ? kLiggghtsCompactionTimestepFraction3d : kSettleCompactionTimestepFraction;
+  const double compaction_step =
+      coarse_compaction ? kLiggghtsCompactionTimestepFraction3d : kSettleCompactionTimestepFraction;
   c.settings.compaction_timestep_fraction = compaction_step;
   const double restitution = lowest_restitution(scene);
   const nlohmann::json step_record =

@@ -132,11 +132,12 @@ double yade_compaction_damping(double depth_in_largest_diameters);
 inline constexpr double kSettleCompactionTimestepFraction = 0.4;
 // LIGGGHTS compacts a 3D bed in one go at 0.6: bed3d's BTR seeds 1-3 relaxed to its pours' 0.6254 at compaction
 // damping 0.085 gave Z 5.512 / 5.498 / 5.478 (mean 5.496) against 5.538 / 5.486 / 5.474 (5.499) at 0.4, the pours'
-// 5.498 +- 0.020, and the same packing fraction to 0.0003; on docs/settle's six periodic rows (three settle seeds
-// each) every row's mean Z within 1 of its floors of where it was and the packing fractions within 0.0006, for 0.8x
-// the relaxation's processor time (docs/guide/settle.md, "The compaction's step at 0.6"). The frictionless
-// compaction's only limit is the normal contact's stability, which the rule's damping factor already carries (the
-// glass bed's margin is 8x the rule's 0.2). YADE, 2D beds and beds compacted in slabs keep 0.4: not measured there.
+// 5.498 +- 0.020, and the same packing fraction to 0.0003; on docs/settle's eight bed rows (three settle seeds
+// each) every row's mean Z within one of its floors of where it was and the packing fractions within 0.0004, for
+// 0.82-0.88x the relaxation's processor time (0.85x at 10^5 grains; docs/guide/settle.md, "The compaction's step at
+// 0.6"). The frictionless compaction's only limit is the normal contact's stability, which the rule's damping
+// factor already carries (the glass bed's margin is 8x the rule's 0.2). YADE, 2D beds and beds compacted in slabs
+// keep 0.4: not measured there.
 inline constexpr double kLiggghtsCompactionTimestepFraction3d = 0.6;
 // The quasi-static settle after the compaction, 3D beds: 0.4 (the scene's own when coarser or
 // explicit; 2D and heaps keep the scene's). Against 0.2 on docs/settle's beds (3000 grains; friction 0.1-0.5,
