@@ -45,6 +45,25 @@ nlohmann::json coarser_step_3d(Scene& scene, double fraction, const std::string&
   return scenes_step(scene);
 }
 
+// The settle's step after a bed's compaction: `scene` takes the coarse 3D fraction unless the bed is compacted in
+// slabs or has grains of low restitution, where the coarse step was seen to keep the bed moving (or to crash
+// LIGGGHTS). Returns settle.json's record of the fraction used.
+nlohmann::json settle_step(Scene& scene, int slabs) {
+  if (slabs > 1)
+    return scenes_step(scene, ": a bed compacted in slabs keeps it after the compaction, since at 0.4 a held-out bed "
+                              "23 largest diameters deep (restitution 0.3) still moved at the max time in both "
+                              "engines, and at 0.2 came to rest 0.02-0.03 s after the compaction (docs/guide/settle.md)");
+  const double restitution = lowest_restitution(scene);
+  if (restitution < kCoarseSettleMinRestitution)
+    return scenes_step(scene, ": restitution " + g6(restitution) + " (below " + g6(kCoarseSettleMinRestitution) +
+                                  ") keeps it after the compaction, since at 0.4 beds of restitution 0.1 did not "
+                                  "come to rest or crashed LIGGGHTS, and at 0.2 came to rest (docs/guide/settle.md)");
+  return coarser_step_3d(scene, kSettleTimestepFraction3d,
+                         "btr settle: the settled beds' packing fraction and coordination are those at 0.2 (to 1e-4 "
+                         "and 0.02, 8 beds in LIGGGHTS and 1 in YADE, up to 14 largest diameters deep) for 0.66-0.94x "
+                         "the relaxation's time (docs/guide/settle.md)");
+}
+
 }  // namespace
 
 bool settle_builds_heap(const Scene& scene) {
@@ -230,20 +249,7 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
   const double compaction_step =
       coarse_compaction ? kLiggghtsCompactionTimestepFraction3d : kSettleCompactionTimestepFraction;
   c.settings.compaction_timestep_fraction = compaction_step;
-  const double restitution = lowest_restitution(scene);
-  const nlohmann::json step_record =
-      slabs > 1
-          ? scenes_step(scene, ": a bed compacted in slabs keeps it after the compaction, since at 0.4 a held-out bed "
-                               "23 largest diameters deep (restitution 0.3) still moved at the max time in both "
-                               "engines, and at 0.2 came to rest 0.02-0.03 s after the compaction (docs/guide/settle.md)")
-      : restitution < kCoarseSettleMinRestitution
-          ? scenes_step(scene, ": restitution " + g6(restitution) + " (below " + g6(kCoarseSettleMinRestitution) +
-                                   ") keeps it after the compaction, since at 0.4 beds of restitution 0.1 did not "
-                                   "come to rest or crashed LIGGGHTS, and at 0.2 came to rest (docs/guide/settle.md)")
-          : coarser_step_3d(c.scene, kSettleTimestepFraction3d,
-                            "btr settle: the settled beds' packing fraction and coordination are those at 0.2 (to "
-                            "1e-4 and 0.02, 8 beds in LIGGGHTS and 1 in YADE, up to 14 largest diameters deep) for "
-                            "0.66-0.94x the relaxation's time (docs/guide/settle.md)");
+  const nlohmann::json step_record = settle_step(c.scene, slabs);
   const double compaction_damping =
       !yade ? kCompactionDamping : yade_3d ? yade_compaction_damping(compacted_depth) : kYadeCompactionDamping;
   c.settings.compaction_damping = compaction_damping;
