@@ -45,6 +45,18 @@ nlohmann::json coarser_step_3d(Scene& scene, double fraction, const std::string&
   return scenes_step(scene);
 }
 
+// The frictionless compaction's step: LIGGGHTS' one compaction of a 3D bed takes kLiggghtsCompactionTimestepFraction3d,
+// YADE, 2D beds and beds compacted in slabs kSettleCompactionTimestepFraction. Returns settle.json's record of it.
+nlohmann::json compaction_step(const Scene& scene, bool yade, int slabs) {
+  if (!yade && scene.dimension == 3 && slabs == 1)
+    return {{"value", kLiggghtsCompactionTimestepFraction3d},
+            {"from", "btr settle: LIGGGHTS' one compaction of a 3D bed, three times the scene's usual 0.2, measured on "
+                     "bed3d and docs/settle's periodic beds to give the same structure as 0.4 (docs/guide/settle.md)"}};
+  return {{"value", kSettleCompactionTimestepFraction},
+          {"from", "btr settle: twice the scene's usual 0.2, measured on bed3d to give the same structure (0.6, taken "
+                   "for LIGGGHTS' one compaction of a 3D bed, was not measured in YADE, in 2D or in slabs)"}};
+}
+
 // The settle's step after a bed's compaction: `scene` takes the coarse 3D fraction unless the bed is compacted in
 // slabs or has grains of low restitution, where the coarse step was seen to keep the bed moving (or to crash
 // LIGGGHTS). Returns settle.json's record of the fraction used.
@@ -245,10 +257,8 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
   const bool yade_3d = yade && scene.dimension == 3;
   const int slabs = settle_compaction_slabs(depth);
   const double compacted_depth = depth / slabs;
-  const bool coarse_compaction = !yade && scene.dimension == 3 && slabs == 1;
-  const double compaction_step =
-      coarse_compaction ? kLiggghtsCompactionTimestepFraction3d : kSettleCompactionTimestepFraction;
-  c.settings.compaction_timestep_fraction = compaction_step;
+  const nlohmann::json compaction_step_record = compaction_step(scene, yade, slabs);
+  c.settings.compaction_timestep_fraction = compaction_step_record["value"].get<double>();
   const nlohmann::json step_record = settle_step(c.scene, slabs);
   const double compaction_damping =
       !yade ? kCompactionDamping : yade_3d ? yade_compaction_damping(compacted_depth) : kYadeCompactionDamping;
@@ -280,13 +290,7 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
       {"target_phi", {{"value", target_phi}, {"from", target_from}}},
       {"compaction_damping",
        {{"value", compaction_damping}, {"bed_depth_largest_diameters", depth}, {"from", damping_from}}},
-      {"compaction_timestep_fraction",
-       {{"value", compaction_step},
-        {"from", coarse_compaction
-                     ? "btr settle: LIGGGHTS' one compaction of a 3D bed, three times the scene's usual 0.2, measured on "
-                       "bed3d and docs/settle's periodic beds to give the same structure as 0.4 (docs/guide/settle.md)"
-                     : "btr settle: twice the scene's usual 0.2, measured on bed3d to give the same structure (0.6, "
-                       "taken for LIGGGHTS' one compaction of a 3D bed, was not measured in YADE, in 2D or in slabs)"}}},
+      {"compaction_timestep_fraction", compaction_step_record},
       {"timestep_fraction", step_record},
       {"target_margin", margin.record},
       {"friction_scales", {{"value", scene.relax.friction_scales}, {"from", "the scene's relax.friction_scales"}}},

@@ -315,7 +315,7 @@ TEST(SettlePlan, LowRestitutionSettlesAtTheScenesStepAfterItsCompaction) {
   EXPECT_EQ(*c.settings.compaction_timestep_fraction, 0.6) << "the frictionless compaction keeps its own step";
 }
 
-TEST(SettlePlan, Bed3dSettlesAtTheCompactionsStepUnlessTheSceneAsksForMoreOrIsCompactedInSlabs) {
+TEST(SettlePlan, Bed3dSettlesAtTheCoarseStepUnlessTheSceneAsksForMoreOrIsCompactedInSlabs) {
   Scene s = bed(3);
   ASSERT_LT(s.relax.timestep_fraction, kSettleTimestepFraction3d);
   SettleChoices c = settle_choices(s, 0.63, {}, 15.0);
