@@ -251,9 +251,8 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
   c.settings.damping = yade ? kSettleDamping : kLiggghtsSettleDamping;
   c.settings.target_margin = margin.value;
   c.scene = scene;
-  // YADE's depth rule was measured on 3D beds; a 2D bed keeps bed3d's value (below). A bed compacted in slabs takes
-  // the value of one slab's depth: each slab compacts under its own weight on a settled bed, as a bed that deep
-  // does (measured at 26.9 largest diameters in 2 slabs: docs/guide/settle.md, "YADE's slabs against YADE's pours").
+  // YADE's depth rule was measured on 3D beds compacted at once; a 2D bed keeps its own value, a bed compacted in slabs
+  // the slabs' (kYadeSlabCompactionDamping): after YADE's collider fix the depth rule's values no longer land slabs.
   const bool yade_3d = yade && scene.dimension == 3;
   const int slabs = settle_compaction_slabs(depth);
   const double compacted_depth = depth / slabs;
@@ -261,24 +260,30 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
   c.settings.compaction_timestep_fraction = compaction_step_record["value"].get<double>();
   const nlohmann::json step_record = settle_step(c.scene, slabs);
   const double compaction_damping =
-      !yade ? kCompactionDamping : yade_3d ? yade_compaction_damping(compacted_depth) : kYadeCompactionDamping;
+      !yade       ? kCompactionDamping
+      : !yade_3d  ? kYade2dCompactionDamping
+      : slabs > 1 ? kYadeSlabCompactionDamping
+                  : yade_compaction_damping(depth);
   c.settings.compaction_damping = compaction_damping;
   const std::string depth_text = g6(depth) + " largest diameters";
   std::string damping_from;
   if (yade && !yade_3d) {
-    damping_from = "btr settle's YADE compaction damping at bed3d's depth, " + g6(kDampingAnchorDepth) +
-                   " largest diameters (" + g6(kYadeCompactionDamping) + "): its depth rule, measured on 3D beds, "
-                   "is not used in 2D, where 0.4 landed the held-out 2D bed's coordination at 19.6 and 0.5 did not "
+    damping_from = "btr settle's YADE compaction damping in 2D (" + g6(kYade2dCompactionDamping) +
+                   "): its depth rule, measured on 3D beds, is not used in 2D, where 0.4 landed the held-out 2D "
+                   "bed's coordination at 19.6 and 0.5 did not "
                    "(docs/guide/settle.md; this bed: " + depth_text + ", not measured in 2D otherwise)";
+  } else if (yade && slabs > 1) {
+    damping_from = "btr settle's YADE compaction damping of a bed compacted in slabs (this bed: " + depth_text + ", " +
+                   std::to_string(slabs) + " slabs of " + g6(compacted_depth) + "): the crossing with YADE's pours of "
+                   "bed3d's grains 26.9 largest diameters deep in 2 slabs, measured before YADE's collider fix, and "
+                   "what landed a held-out deep bed (2 slabs of 11.5) on its pours' mean coordination after it "
+                   "(docs/guide/settle.md, \"YADE's compaction damping after the collider fix\")";
   } else if (yade) {
-    const bool between = compacted_depth >= kYadeShallowDepth && compacted_depth <= kYadeDeepDepth;
+    const bool between = depth >= kYadeShallowDepth && depth <= kYadeDeepDepth;
     damping_from = "btr settle's YADE compaction damping, measured against YADE's own pours of bed3d's grains at " +
                    g6(kYadeShallowDepth) + " largest diameters deep (" + g6(kYadeShallowCompactionDamping) + "), " +
                    g6(kDampingAnchorDepth) + " (" + g6(kYadeCompactionDamping) + ") and " + g6(kYadeDeepDepth) + " (" +
                    g6(kYadeDeepCompactionDamping) + "), linear between (this bed: " + depth_text +
-                   (slabs > 1 ? ", compacted in " + std::to_string(slabs) + " slabs of " + g6(compacted_depth) +
-                                    ", whose depth sets it"
-                              : "") +
                    (between ? ")" : ", outside them: the nearer end's value, not measured there)");
   } else {
     const bool measured_depth = depth >= 0.75 * kDampingAnchorDepth && depth <= kDeepBedDepth;

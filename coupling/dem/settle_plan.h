@@ -108,23 +108,33 @@ std::string settle_depth_warning(double depth_in_largest_diameters, int compacti
 // damping was measured on. Compacted at once, a deeper bed collapses from the floor up and leaves a density
 // gradient (39 largest diameters: 0.65 at the floor, 0.60 at the top; its pour 0.62-0.63 throughout).
 int settle_compaction_slabs(double depth_in_largest_diameters);
-// YADE's compaction damping: the value that lands bed3d's grains, 3 cm deep, on YADE's own pours' coordination, by
-// LIGGGHTS' protocol (docs/guide/settle.md, "YADE's compaction damping against YADE's pours"): 2000 grains,
-// BTR seeds 1-3 relaxed to the pours' mean phi, mean Z 5.340 / 5.417 / 5.452 / 5.462 / 5.506 / 5.575 at
-// 0.3 / 0.4 / 0.45 / 0.5 / 0.6 / 0.7 against the pours' 5.421 +- 0.033; 0.4 lands on the mean and keeps every
-// seed within the reach.
-inline constexpr double kYadeCompactionDamping = 0.4;
-// YADE's shallower beds want more: the same grains 2 cm (9.4 largest diameters) deep, 1333 grains in the same cell,
-// BTR seeds 1-3 relaxed to their pours' mean phi, mean Z 5.350 / 5.386 / 5.487 / 5.515 / 5.559 at 0.4 / 0.5 / 0.6 /
-// 0.7 / 0.8 against the pours' 5.456 +- 0.072; the least-squares line crosses it at 0.59, so 0.6.
-inline constexpr double kYadeShallowDepth = 9.4, kYadeShallowCompactionDamping = 0.6;
-// And deeper ones too: 4.2 cm (19.7 largest diameters, 2800 grains in the same cell), mean Z 5.344 / 5.420 / 5.460 /
-// 5.480 / 5.526 at 0.3 / 0.4 / 0.5 / 0.6 / 0.7 against the pours' 5.509 +- 0.011; the least-squares line crosses it at
-// 0.65 +- 0.03 (docs/guide/settle.md, "A third depth for YADE"). Settle's single compaction serves beds up to
-// kDeepBedDepth (21.15), so this is its deepest.
-inline constexpr double kYadeDeepDepth = 19.7, kYadeDeepCompactionDamping = 0.65;
-// YADE's compaction damping for a bed `depth` largest diameters deep: linear between the depths it was measured at
-// (kYadeShallowDepth, kDampingAnchorDepth, kYadeDeepDepth), the nearer end's value outside them (settle.json says so).
+// YADE's compaction damping in 3D: the value that lands bed3d's grains on YADE's own pours' coordination, by
+// LIGGGHTS' protocol, measured at three depths in one 13.4 mm periodic cell (BTR seeds relaxed to their pours' mean
+// phi; the least-squares line of Z against the damping crossed with the pours' mean Z). Measured again after YADE's
+// periodic collider fix (0cca044), which took about 0.1 contacts a grain from the relaxed beds at a given damping
+// (docs/guide/settle.md, "YADE's compaction damping after the collider fix"; before it: 0.6 / 0.4 / 0.65):
+// - 2 cm, 9.4 largest diameters, 1333 grains: six pours, Z 5.446 +- 0.050; BTR seeds 1-6, mean Z 5.299 / 5.356 /
+//   5.404 / 5.446 / 5.482 at 0.4 / 0.5 / 0.6 / 0.7 / 0.8: crossing 0.71 +- 0.06;
+// - 3 cm, 14.1, 2000 grains: three pours, Z 5.478 +- 0.032; BTR seeds 1-3, mean Z 5.263 / 5.311 / 5.368 / 5.411 /
+//   5.432 / 5.495 / 5.527 at 0.3 ... 0.9: crossing 0.78 +- 0.06;
+// - 4.2 cm, 19.7, 2800 grains: three pours, Z 5.504 +- 0.022; BTR seeds 1-3, mean Z 5.418 / 5.455 / 5.508 / 5.527 /
+//   5.540 at 0.5 ... 0.9: crossing 0.75 +- 0.05.
+// Settle's single compaction serves beds up to kDeepBedDepth (21.15), so 19.7 is its deepest.
+inline constexpr double kYadeShallowDepth = 9.4, kYadeShallowCompactionDamping = 0.71;
+inline constexpr double kYadeCompactionDamping = 0.78;  // at kDampingAnchorDepth
+inline constexpr double kYadeDeepDepth = 19.7, kYadeDeepCompactionDamping = 0.75;
+// A 2D bed in YADE: 0.4 at any depth, the value that landed the held-out 2D bed (19.6 largest diameters) on its
+// pours' coordination, before and after the collider fix (docs/settle/README.md); the 3D rule is not used in 2D.
+inline constexpr double kYade2dCompactionDamping = 0.4;
+// A YADE bed compacted in slabs (3D): each slab compacts under its own weight on a settled bed. Measured before the
+// collider fix on bed3d's grains 26.9 largest diameters deep in 2 slabs of 13.45: Z 0.042 under two YADE pours at
+// 0.426, 0.080 over at 0.65, the line crossing at about 0.50. After it, a held-out deep bed (2 slabs of 11.5) at 0.51
+// landed on its three pours' mean (Z -0.007). The 3D rule's values after the fix (0.71-0.78) were not measured on
+// slabs.
+inline constexpr double kYadeSlabCompactionDamping = 0.5;
+// YADE's compaction damping for a 3D bed compacted at once, `depth` largest diameters deep: linear between the depths
+// it was measured at (kYadeShallowDepth, kDampingAnchorDepth, kYadeDeepDepth), the nearer end's value outside them
+// (settle.json says so).
 double yade_compaction_damping(double depth_in_largest_diameters);
 // The compaction's step as a fraction of the Rayleigh / contact time: twice the settle's 0.2, the setting
 // measured to give the same structure for 0.65x the processor time (coupling/README.md, "The compaction's time

@@ -164,11 +164,11 @@ TEST(CompactionSlabs, SettleCompactsBedsDeeperThanItsMeasuredDepthInSlabs) {
   EXPECT_NE(yade_warning.find("4 slabs"), std::string::npos) << yade_warning;
   EXPECT_NE(yade_warning.find("measured in YADE on two such beds"), std::string::npos) << yade_warning;
   EXPECT_EQ(yade_warning.find("LIGGGHTS"), std::string::npos) << "YADE's warning names YADE's measurements only";
-  // YADE's compaction damping from one slab's depth, by hand: 50 / 4 = 12.5 largest diameters, between 9.4 (0.6)
-  // and 14.1 (0.4): 0.6 - 0.2 (12.5 - 9.4) / 4.7; 26.9 in 2 slabs of 13.45: 0.6 - 0.2 (13.45 - 9.4) / 4.7.
-  EXPECT_NEAR(yade.settings.compaction_damping.value(), 0.6 - 0.2 * 3.1 / 4.7, 1e-12);
-  EXPECT_NEAR(btr::settle_choices(s, 0.63, {}, 26.9, {}).settings.compaction_damping.value(), 0.6 - 0.2 * 4.05 / 4.7, 1e-12);
-  EXPECT_NEAR(btr::settle_choices(s, 0.63, {}, 19.7, {}).settings.compaction_damping.value(), 0.65, 1e-12)
+  // YADE's slabs take the slabs' value at any depth (50 in 4 slabs, 26.9 in 2), not the depth rule's; a bed in one
+  // compaction up to 21.15 takes the rule's value at its own depth (19.7: the deepest measured, 0.75).
+  EXPECT_DOUBLE_EQ(yade.settings.compaction_damping.value(), 0.5);
+  EXPECT_DOUBLE_EQ(btr::settle_choices(s, 0.63, {}, 26.9, {}).settings.compaction_damping.value(), 0.5);
+  EXPECT_NEAR(btr::settle_choices(s, 0.63, {}, 19.7, {}).settings.compaction_damping.value(), 0.75, 1e-12)
       << "one slab up to 21.15: the bed's own depth";
   EXPECT_EQ(btr::settle_choices(s, 0.63, {}, 14.1, {}).settings.compaction_slabs, 1);
 }
@@ -214,7 +214,7 @@ TEST(CompactionSlabs, YadeCompactsTheBedSlabBySlab) {
   const double goal = btr::bulk_packing_fraction(b.packing.grains, b.scene, 2.0) + 0.025;
   // settle's choices for YADE, which keep the run short: its damping, steps and stop rule
   btr::RelaxSettings s = slabs(goal, 2);
-  s.compaction_damping = btr::kYadeCompactionDamping;
+  s.compaction_damping = btr::kYadeSlabCompactionDamping;
   s.compaction_timestep_fraction = btr::kSettleCompactionTimestepFraction;
   s.damping = 0.5;
   b.scene.relax.stop_rule = "unbalanced-force";
