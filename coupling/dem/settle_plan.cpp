@@ -255,42 +255,41 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
   // the slabs' (kYadeSlabCompactionDamping): after YADE's collider fix the depth rule's values no longer land slabs.
   const bool yade_3d = yade && scene.dimension == 3;
   const int slabs = settle_compaction_slabs(depth);
-  const double compacted_depth = depth / slabs;
   const nlohmann::json compaction_step_record = compaction_step(scene, yade, slabs);
   c.settings.compaction_timestep_fraction = compaction_step_record["value"].get<double>();
   const nlohmann::json step_record = settle_step(c.scene, slabs);
-  const double compaction_damping =
-      !yade       ? kCompactionDamping
-      : !yade_3d  ? kYade2dCompactionDamping
-      : slabs > 1 ? kYadeSlabCompactionDamping
-                  : yade_compaction_damping(depth);
-  c.settings.compaction_damping = compaction_damping;
+  // The value and where it came from, chosen together.
   const std::string depth_text = g6(depth) + " largest diameters";
+  double compaction_damping = kCompactionDamping;
   std::string damping_from;
-  if (yade && !yade_3d) {
+  if (!yade) {
+    const bool measured_depth = depth >= 0.75 * kDampingAnchorDepth && depth <= kDeepBedDepth;
+    damping_from = "btr settle's LIGGGHTS compaction damping, measured against the engine's own pours of bed3d at " +
+                   g6(kDampingAnchorDepth) + " largest diameters deep (this bed: " + depth_text +
+                   (measured_depth ? ")" : ", away from that depth: not measured there)");
+  } else if (!yade_3d) {
+    compaction_damping = kYade2dCompactionDamping;
     damping_from = "btr settle's YADE compaction damping in 2D (" + g6(kYade2dCompactionDamping) +
                    "): its depth rule, measured on 3D beds, is not used in 2D, where 0.4 landed the held-out 2D "
                    "bed's coordination at 19.6 and 0.5 did not "
                    "(docs/guide/settle.md; this bed: " + depth_text + ", not measured in 2D otherwise)";
-  } else if (yade && slabs > 1) {
+  } else if (slabs > 1) {
+    compaction_damping = kYadeSlabCompactionDamping;
     damping_from = "btr settle's YADE compaction damping of a bed compacted in slabs (this bed: " + depth_text + ", " +
-                   std::to_string(slabs) + " slabs of " + g6(compacted_depth) + "): the crossing with YADE's pours of "
+                   std::to_string(slabs) + " slabs of " + g6(depth / slabs) + "): the crossing with YADE's pours of "
                    "bed3d's grains 26.9 largest diameters deep in 2 slabs, measured before YADE's collider fix, and "
                    "what landed a held-out deep bed (2 slabs of 11.5) on its pours' mean coordination after it "
                    "(docs/guide/settle.md, \"YADE's compaction damping after the collider fix\")";
-  } else if (yade) {
+  } else {
+    compaction_damping = yade_compaction_damping(depth);
     const bool between = depth >= kYadeShallowDepth && depth <= kYadeDeepDepth;
     damping_from = "btr settle's YADE compaction damping, measured against YADE's own pours of bed3d's grains at " +
                    g6(kYadeShallowDepth) + " largest diameters deep (" + g6(kYadeShallowCompactionDamping) + "), " +
                    g6(kDampingAnchorDepth) + " (" + g6(kYadeCompactionDamping) + ") and " + g6(kYadeDeepDepth) + " (" +
                    g6(kYadeDeepCompactionDamping) + "), linear between (this bed: " + depth_text +
                    (between ? ")" : ", outside them: the nearer end's value, not measured there)");
-  } else {
-    const bool measured_depth = depth >= 0.75 * kDampingAnchorDepth && depth <= kDeepBedDepth;
-    damping_from = "btr settle's LIGGGHTS compaction damping, measured against the engine's own pours of bed3d at " +
-                   g6(kDampingAnchorDepth) + " largest diameters deep (this bed: " + depth_text +
-                   (measured_depth ? ")" : ", away from that depth: not measured there)");
   }
+  c.settings.compaction_damping = compaction_damping;
   c.record = {
       {"target_phi", {{"value", target_phi}, {"from", target_from}}},
       {"compaction_damping",

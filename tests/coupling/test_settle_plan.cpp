@@ -231,6 +231,7 @@ TEST(SettlePlan, YadeCompactionDampingFollowsTheBedsDepthBetweenTheThreeMeasured
   EXPECT_NE(from(20.0).find("not measured there"), std::string::npos) << from(20.0);
   EXPECT_NE(from(21.0).find("not measured there"), std::string::npos) << from(21.0);
   EXPECT_NE(from(42.3).find("3 slabs of 14.1"), std::string::npos) << from(42.3);
+  EXPECT_EQ(from(42.3).find("not measured"), std::string::npos) << from(42.3);
   EXPECT_NE(from(42.3).find("collider fix"), std::string::npos) << from(42.3);
   // A 2D bed keeps bed3d's value at any depth: the rule was measured in 3D.
   Scene y2 = bed(2);
