@@ -202,9 +202,9 @@ std::string settle_depth_warning(double depth, int slabs, bool yade) {
   if (slabs > 1)
     return deep + "compacted in " + std::to_string(slabs) + " slabs from the floor up, as a pour builds it; " +
            (yade ? "measured in YADE on two such beds of 2 slabs (26.9 largest diameters of bed3d's grains, and 23 of "
-                   "held-out grains, docs/guide/settle.md), each slab's compaction damping from its own depth: on the "
-                   "mean of three settles packing fraction within 0.002 of the pours and coordination within 0.05, "
-                   "each settle off by its calibration's draw"
+                   "held-out grains, docs/guide/settle.md): on the mean of three settles coordination within 0.05 of "
+                   "the pours and packing fraction up to 0.0027 over them (a bed compacted in slabs lands "
+                   "0.0010-0.0022 over its target), each settle off by its calibration's draw too"
                  : "measured on one such bed in LIGGGHTS (39 largest diameters, docs/settle/deep): coordination and "
                    "density against height within its pours' scatter, packing fraction +0.002 over them (the target "
                    "0.0015 under them, the settle 0.003 over its target)") +
@@ -276,10 +276,11 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
   } else if (slabs > 1) {
     compaction_damping = kYadeSlabCompactionDamping;
     damping_from = "btr settle's YADE compaction damping of a bed compacted in slabs (this bed: " + depth_text + ", " +
-                   std::to_string(slabs) + " slabs of " + g6(depth / slabs) + "): the crossing with YADE's pours of "
-                   "bed3d's grains 26.9 largest diameters deep in 2 slabs, measured before YADE's collider fix, and "
-                   "what landed a held-out deep bed (2 slabs of 11.5) on its pours' mean coordination after it "
-                   "(docs/guide/settle.md, \"YADE's compaction damping after the collider fix\")";
+                   std::to_string(slabs) + " slabs of " + g6(depth / slabs) +
+                   "): measured after YADE's collider fix against YADE's pours of bed3d's grains 26.9 largest "
+                   "diameters deep in 2 slabs (crossing 0.55 +- 0.05; at 0.5 the mean coordination 0.019 under the "
+                   "pours, within their reach), and what landed a held-out deep bed (2 slabs of 11.5) on its pours' "
+                   "mean coordination (docs/guide/settle.md, \"YADE's slabs after the collider fix\")";
   } else {
     compaction_damping = yade_compaction_damping(depth);
     const bool between = depth >= kYadeShallowDepth && depth <= kYadeDeepDepth;
