@@ -127,11 +127,11 @@ inline constexpr double kYadeDeepDepth = 19.7, kYadeDeepCompactionDamping = 0.75
 // pours' coordination, before and after the collider fix (docs/settle/README.md); the 3D rule is not used in 2D.
 inline constexpr double kYade2dCompactionDamping = 0.4;
 // A YADE bed compacted in slabs (3D): each slab compacts under its own weight on a settled bed. Measured after the
-// collider fix on bed3d's grains 26.9 largest diameters deep in 2 slabs of 13.45 (docs/guide/settle.md, "YADE's slabs
-// after the collider fix"): three pours, Z 5.504 +- 0.032; settles' beds (seeds 1-3) relaxed to the pours' mean phi,
-// mean Z 5.423 / 5.485 / 5.566 at 0.35 / 0.5 / 0.7: crossing 0.55 +- 0.05; at 0.5, 0.019 under the pours (within their
-// reach, 0.075). Before the fix it had crossed at about 0.50; a held-out deep bed (2 slabs of 11.5) at 0.51 landed on
-// its pours' mean after it (Z -0.007). The 3D rule's values (0.71-0.78) would land slabs about 0.08 over.
+// collider fix on bed3d's grains 26.9 largest diameters deep in 2 slabs of 13.45 (docs/guide/settle.md, "YADE's
+// slabs after the collider fix"): three pours, Z 5.504 +- 0.032; settles' beds (seeds 1-3) relaxed to the first two
+// pours' phi, mean Z 5.423 / 5.485 / 5.566 at 0.35 / 0.5 / 0.7: crossing 0.55 +- 0.05; at 0.5, 0.019 under the pours
+// (within their reach, 0.075). Before the fix it had crossed at about 0.50; a held-out deep bed (2 slabs of 11.5) at
+// 0.51 landed on its pours' mean after it (Z -0.007). The 3D rule's values (0.71-0.78) would land slabs 0.08 over.
 inline constexpr double kYadeSlabCompactionDamping = 0.5;
 // YADE's compaction damping for a 3D bed compacted at once, `depth` largest diameters deep: linear between the depths
 // it was measured at (kYadeShallowDepth, kDampingAnchorDepth, kYadeDeepDepth), the nearer end's value outside them
