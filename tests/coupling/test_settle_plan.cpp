@@ -233,7 +233,7 @@ TEST(SettlePlan, YadeCompactionDampingFollowsTheBedsDepthBetweenTheThreeMeasured
   EXPECT_NE(from(42.3).find("3 slabs of 14.1"), std::string::npos) << from(42.3);
   EXPECT_EQ(from(42.3).find("not measured"), std::string::npos) << from(42.3);
   EXPECT_NE(from(42.3).find("collider fix"), std::string::npos) << from(42.3);
-  // A 2D bed keeps bed3d's value at any depth: the rule was measured in 3D.
+  // A 2D bed keeps its own value (0.4) at any depth: the depth rule was measured in 3D.
   Scene y2 = bed(2);
   y2.relax.engine = "yade";
   for (const double depth : {9.4, 19.6}) {
