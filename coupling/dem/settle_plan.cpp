@@ -45,17 +45,16 @@ nlohmann::json coarser_step_3d(Scene& scene, double fraction, const std::string&
   return scenes_step(scene);
 }
 
-// The frictionless compaction's step: one compaction of a 3D bed takes kBedCompactionTimestepFraction3d, in either
-// engine; 2D beds and beds compacted in slabs kSettleCompactionTimestepFraction. Returns settle.json's record of it.
-nlohmann::json compaction_step(const Scene& scene, int slabs) {
-  if (scene.dimension == 3 && slabs == 1)
-    return {{"value", kBedCompactionTimestepFraction3d},
-            {"from", "btr settle: one compaction of a 3D bed, three times the scene's usual 0.2, measured to give the "
-                     "same structure as 0.4 on bed3d and docs/settle's periodic beds in LIGGGHTS, and on bed3d, the "
-                     "matrix's YADE row and a held-out YADE bed in YADE (docs/guide/settle.md)"}};
+// The frictionless compaction's step: LIGGGHTS' one compaction of a 3D bed takes kLiggghtsCompactionTimestepFraction3d,
+// YADE, 2D beds and beds compacted in slabs kSettleCompactionTimestepFraction. Returns settle.json's record of it.
+nlohmann::json compaction_step(const Scene& scene, bool yade, int slabs) {
+  if (!yade && scene.dimension == 3 && slabs == 1)
+    return {{"value", kLiggghtsCompactionTimestepFraction3d},
+            {"from", "btr settle: LIGGGHTS' one compaction of a 3D bed, three times the scene's usual 0.2, measured on "
+                     "bed3d and docs/settle's periodic beds to give the same structure as 0.4 (docs/guide/settle.md)"}};
   return {{"value", kSettleCompactionTimestepFraction},
           {"from", "btr settle: twice the scene's usual 0.2, measured on bed3d to give the same structure (0.6, taken "
-                   "for one compaction of a 3D bed, was not measured in 2D or in slabs)"}};
+                   "for LIGGGHTS' one compaction of a 3D bed, was not measured in YADE, in 2D or in slabs)"}};
 }
 
 // The settle's step after a bed's compaction: `scene` takes the coarse 3D fraction unless the bed is compacted in
@@ -256,7 +255,7 @@ SettleChoices settle_choices(const Scene& scene, double target_phi, const nlohma
   // the slabs' (kYadeSlabCompactionDamping): after YADE's collider fix the depth rule's values no longer land slabs.
   const bool yade_3d = yade && scene.dimension == 3;
   const int slabs = settle_compaction_slabs(depth);
-  const nlohmann::json compaction_step_record = compaction_step(scene, slabs);
+  const nlohmann::json compaction_step_record = compaction_step(scene, yade, slabs);
   c.settings.compaction_timestep_fraction = compaction_step_record["value"].get<double>();
   const nlohmann::json step_record = settle_step(c.scene, slabs);
   // The value and where it came from, chosen together.

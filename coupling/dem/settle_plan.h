@@ -141,18 +141,15 @@ double yade_compaction_damping(double depth_in_largest_diameters);
 // measured to give the same structure for 0.65x the processor time (coupling/README.md, "The compaction's time
 // step").
 inline constexpr double kSettleCompactionTimestepFraction = 0.4;
-// One compaction of a 3D bed runs at 0.6, in either engine. LIGGGHTS: bed3d's BTR seeds 1-3 relaxed to its pours'
-// 0.6254 at compaction damping 0.085 gave Z 5.512 / 5.498 / 5.478 (mean 5.496) against 5.538 / 5.486 / 5.474 (5.499)
-// at 0.4, the pours' 5.498 +- 0.020, and the same packing fraction to 0.0003; on docs/settle's eight bed rows (three
-// settle seeds each) every row's mean Z within one of its floors of where it was and the packing fractions within
-// 0.0004, for 0.82-0.88x the relaxation's processor time (0.85x at 10^5 grains). YADE: bed3d's settles at 10^4
-// grains, seeds 1-3, relaxed again at 0.6: Z +0.002 / +0.016 / -0.009 and phi within 0.0004, for 0.84-0.85x; the
-// matrix's YADE row and a held-out YADE bed (1000 and 1600 grains, three seeds each) moved their mean Z by +0.021 and
-// -0.002, inside one relaxation's scatter there (docs/guide/settle.md, "The compaction's step at 0.6"). The
-// frictionless compaction's only limit is the normal contact's stability, which the rule's damping factor already
-// carries (the glass bed's margin is 8x the rule's 0.2). 2D beds and beds compacted in slabs keep 0.4: not measured
-// there.
-inline constexpr double kBedCompactionTimestepFraction3d = 0.6;
+// LIGGGHTS compacts a 3D bed in one go at 0.6: bed3d's BTR seeds 1-3 relaxed to its pours' 0.6254 at compaction
+// damping 0.085 gave Z 5.512 / 5.498 / 5.478 (mean 5.496) against 5.538 / 5.486 / 5.474 (5.499) at 0.4, the pours'
+// 5.498 +- 0.020, and the same packing fraction to 0.0003; on docs/settle's eight bed rows (three settle seeds
+// each) every row's mean Z within one of its floors of where it was and the packing fractions within 0.0004, for
+// 0.82-0.88x the relaxation's processor time (0.85x at 10^5 grains; docs/guide/settle.md, "The compaction's step at
+// 0.6"). The frictionless compaction's only limit is the normal contact's stability, which the rule's damping
+// factor already carries (the glass bed's margin is 8x the rule's 0.2). YADE, 2D beds and beds compacted in slabs
+// keep 0.4: not measured there.
+inline constexpr double kLiggghtsCompactionTimestepFraction3d = 0.6;
 // The quasi-static settle after the compaction, 3D beds: 0.4 (the scene's own when coarser or
 // explicit; 2D and heaps keep the scene's). Against 0.2 on docs/settle's beds (3000 grains; friction 0.1-0.5,
 // rolling friction, size ratio 1-4, a cylinder), bed3d and a YADE bed (docs/guide/settle.md, "The settle's time

@@ -368,13 +368,13 @@ TEST_F(SettleCli, Bed3dCompactsAndSettlesAtTheirOwnStepsAndHandsTheUserTheScenes
   ASSERT_EQ(r.code, 0) << r.out << r.err;
   const nlohmann::json rec = nlohmann::json::parse(slurp(out / "settle.json"));
   EXPECT_EQ(rec["chosen"]["timestep_fraction"]["value"].get<double>(), kSettleTimestepFraction3d);
-  EXPECT_EQ(rec["chosen"]["compaction_timestep_fraction"]["value"].get<double>(), kBedCompactionTimestepFraction3d);
+  EXPECT_EQ(rec["chosen"]["compaction_timestep_fraction"]["value"].get<double>(), kLiggghtsCompactionTimestepFraction3d);
 
   // the compaction ran at its fraction and the settle after it at the settle's, by the same rule
   const nlohmann::json relaxed = nlohmann::json::parse(slurp(out / "relax" / "relaxed.json"));
   const double step = relaxed["relax"]["timestep"].get<double>();
   EXPECT_NEAR(relaxed["target_phi"]["compaction_timestep"].get<double>() / step,
-              kBedCompactionTimestepFraction3d / kSettleTimestepFraction3d, 1e-12);
+              kLiggghtsCompactionTimestepFraction3d / kSettleTimestepFraction3d, 1e-12);
   // the user's own input keeps the scene's fraction, 0.2: half the step, by the same rule
   std::ifstream in(out / "dem_input" / "in.btr");
   std::string line;
