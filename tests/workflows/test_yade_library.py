@@ -110,14 +110,13 @@ def test_a_periodic_cells_collider_searches_every_pair_at_every_run(library, per
     assert collider.sortAxis == (2 if periodic else 0)
 
 
-
 @pytest.mark.parametrize("pour", [False, True])
 def test_a_periodic_cells_boxes_keep_the_whole_margin_where_nothing_falls(library, pour):
     """Every full search costs about N^2 / depth, so in a periodic cell a relaxation's boxes keep the whole margin
     and the search runs only when a grain has left its box. YADE's default (targetInterv) shrinks a slow grain's
     box, down to nothing for a grain at rest, and a bed near rest then searched every few steps (954 searches
-    against 18 in a 10^4-grain settle, coupling/README.md). A pour's release keeps the default, where its falling
-    grains run the search often anyway and the pile's small boxes save pairs (1469 grains: 50 s against 62 s)."""
+    against 18 in a 10^4-grain settle, coupling/README.md). A pour keeps the default: its falling grains run the
+    search often anyway, and the pile's small boxes save pairs (1469 grains: 50 s against 62 s)."""
     library.MODEL, library.COMPACTION, library.DAMPING, library.GRAVITY = "hertz", None, 0.0, 0.0
     library.POUR = {"batches": []} if pour else None
     library.VERLET_DIST = 1e-4
