@@ -297,7 +297,8 @@ def build_engines():
         # box every few steps (954 full searches in a 10^4-grain settle, 58 % of its time; 18 with the whole
         # margin). A pour keeps the default: its falling grains run the search often anyway, and the pile's small
         # boxes save pairs (coupling/README.md).
-        collider.targetInterv = 100 if POUR else 0
+        if not POUR:
+            collider.targetInterv = 0
     _collider = collider
     O.engines = [
         ForceResetter(),

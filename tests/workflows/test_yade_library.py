@@ -90,13 +90,11 @@ def test_run_failure_carries_its_kind(library):
     assert e.kind == "blow_up" and str(e) == "blow-up: ..."
 
 
-@pytest.mark.parametrize("periodic", [True, False])
-def test_a_periodic_cells_collider_searches_every_pair_at_every_run(library, periodic):
-    """YADE's incremental periodic sort let two grains whose boxes straddled the cell's boundary pass into each
-    other (a pour, coupling/README.md "Open floors"): in a periodic cell every collider run finds every pair
-    whose boxes overlap; a walled container keeps YADE's incremental search."""
-    library.MODEL, library.COMPACTION, library.DAMPING, library.GRAVITY = "hertz", None, 0.0, 9.81
-    library.POUR = None
+def build_engines_for_one_species(library, periodic, gravity, pour=None):
+    """A fresh YADE scene of one Hertz species (VERLET_DIST 1e-4 m), in a 1 cm periodic cell if asked, with the
+    library's engines built as a relaxation's (pour None) or a pour's."""
+    library.MODEL, library.COMPACTION, library.DAMPING, library.GRAVITY = "hertz", None, 0.0, gravity
+    library.POUR = pour
     library.VERLET_DIST = 1e-4
     library._pairs[:] = [(0, 0, 0.5, 0.5)]
     library._cell = None
@@ -104,6 +102,14 @@ def test_a_periodic_cells_collider_searches_every_pair_at_every_run(library, per
     if periodic:
         library.periodic_cell(0.01, 0.01, 0.1)
     library.build_engines()
+
+
+@pytest.mark.parametrize("periodic", [True, False])
+def test_a_periodic_cells_collider_searches_every_pair_at_every_run(library, periodic):
+    """YADE's incremental periodic sort let two grains whose boxes straddled the cell's boundary pass into each
+    other (a pour, coupling/README.md "Open floors"): in a periodic cell every collider run finds every pair
+    whose boxes overlap; a walled container keeps YADE's incremental search."""
+    build_engines_for_one_species(library, periodic, gravity=9.81)
     collider = library._collider
     assert collider.sortThenCollide is periodic
     assert collider.allowBiggerThanPeriod is periodic
@@ -117,14 +123,7 @@ def test_a_periodic_cells_boxes_keep_the_whole_margin_where_nothing_falls(librar
     box, down to nothing for a grain at rest, and a bed near rest then searched every few steps (954 searches
     against 18 in a 10^4-grain settle, coupling/README.md). A pour keeps the default: its falling grains run the
     search often anyway, and the pile's small boxes save pairs (1469 grains: 50 s against 62 s)."""
-    library.MODEL, library.COMPACTION, library.DAMPING, library.GRAVITY = "hertz", None, 0.0, 0.0
-    library.POUR = {"batches": []} if pour else None
-    library.VERLET_DIST = 1e-4
-    library._pairs[:] = [(0, 0, 0.5, 0.5)]
-    library._cell = None
-    library.O.reset()
-    library.periodic_cell(0.01, 0.01, 0.1)
-    library.build_engines()
+    build_engines_for_one_species(library, True, gravity=0.0, pour={"batches": []} if pour else None)
     drifting = library.utils.sphere((0.002, 0.005, 0.05), 5e-4)
     at_rest = library.utils.sphere((0.007, 0.005, 0.05), 5e-4)
     library.O.bodies.append([drifting, at_rest])
